@@ -1,0 +1,101 @@
+"""Hermite cubic Euler-Bernoulli beam elements and their sparse assembly.
+
+DOFs are ordered node by node, ``[w_0, theta_0, w_1, theta_1, ...]``: vertical displacement w
+(positive up) [m] and rotation theta = dw/dx (positive bow-up) [rad]; node 0 is the aft end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from flexlift.hull import Hull
+
+
+def element_stiffness(EI: float, l: float) -> np.ndarray:
+    """Stiffness matrix of one element, EI [N m^2], length l [m] (4x4)."""
+    return (EI / l**3) * np.array(
+        [
+            [12.0, 6 * l, -12.0, 6 * l],
+            [6 * l, 4 * l * l, -6 * l, 2 * l * l],
+            [-12.0, -6 * l, 12.0, -6 * l],
+            [6 * l, 2 * l * l, -6 * l, 4 * l * l],
+        ]
+    )
+
+
+def element_mass(m: float, l: float) -> np.ndarray:
+    """Consistent mass matrix of one element, mass per length m [kg/m], length l [m] (4x4)."""
+    return (m * l / 420.0) * np.array(
+        [
+            [156.0, 22 * l, 54.0, -13 * l],
+            [22 * l, 4 * l * l, 13 * l, -3 * l * l],
+            [54.0, 13 * l, 156.0, -22 * l],
+            [-13 * l, -3 * l * l, -22 * l, 4 * l * l],
+        ]
+    )
+
+
+def shape_functions(xi: np.ndarray, l: float) -> np.ndarray:
+    """Hermite shape functions at local coordinates xi in [0, 1] (shape (len(xi), 4)).
+
+    w(xi) = N @ [w_a, theta_a, w_b, theta_b] for an element of length l [m].
+    """
+    xi = np.asarray(xi, dtype=float)
+    return np.stack(
+        [
+            1 - 3 * xi**2 + 2 * xi**3,
+            l * (xi - 2 * xi**2 + xi**3),
+            3 * xi**2 - 2 * xi**3,
+            l * (-(xi**2) + xi**3),
+        ],
+        axis=-1,
+    )
+
+
+def _assemble(blocks: np.ndarray, n_el: int) -> sp.csc_matrix:
+    """Sum per-element 4x4 ``blocks`` (n_el, 4, 4) into a sparse global matrix."""
+    dofs = 2 * np.arange(n_el)[:, None] + np.arange(4)[None, :]
+    rows = np.repeat(dofs, 4, axis=1).ravel()
+    cols = np.tile(dofs, (1, 4)).ravel()
+    n = 2 * (n_el + 1)
+    return sp.csc_matrix((blocks.ravel(), (rows, cols)), shape=(n, n))
+
+
+@dataclass(frozen=True)
+class Beam:
+    """Assembled global matrices of a hull.
+
+    K : sparse (N, N) — stiffness [N/m, N, N m per DOF pair]
+    M : sparse (N, N) — mass, consistent plus point masses [kg, kg m, kg m^2]
+    hull : Hull — the structure they came from
+    """
+
+    K: sp.csc_matrix
+    M: sp.csc_matrix
+    hull: Hull
+
+    @property
+    def n_dof(self) -> int:
+        return self.K.shape[0]
+
+
+def assemble(hull: Hull, extra_mass_per_length: np.ndarray | float = 0.0) -> Beam:
+    """Assemble K and M of ``hull`` (sparse CSC, banded with half-bandwidth 3).
+
+    extra_mass_per_length : added mass (e.g. hydrodynamic) per element or uniform [kg/m]
+    """
+    n = hull.n_elements
+    l = hull.element_length
+    ke = element_stiffness(1.0, l)
+    me = element_mass(1.0, l)
+    m = hull.mass_per_length + np.broadcast_to(np.asarray(extra_mass_per_length, float), (n,))
+    K = _assemble(hull.EI[:, None, None] * ke[None], n)
+    M = _assemble(m[:, None, None] * me[None], n)
+    if np.any(hull.point_masses):
+        diag = np.zeros(2 * (n + 1))
+        diag[0::2] = hull.point_masses
+        M = (M + sp.diags(diag)).tocsc()
+    return Beam(K=K, M=M, hull=hull)

@@ -1,0 +1,138 @@
+"""The structure's description in SI: length, per-element stiffness and mass, point masses.
+
+:class:`Hull` is plain immutable data. Build it from a scenario with :func:`hull_from_scenario`
+or directly (``Hull.uniform(...)``); change the mesh with :meth:`Hull.refined`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.errors import InputError
+
+
+@dataclass(frozen=True)
+class Hull:
+    """A free-free beam of ``n`` equal elements.
+
+    length : float — beam length L, aft end at x = 0 [m]
+    EI : ndarray (n,) — bending stiffness of each element [N m^2]
+    mass_per_length : ndarray (n,) — structural mass per unit length of each element [kg/m]
+    point_masses : ndarray (n+1,) — lumped mass at each node [kg]
+    breadth : float — breadth B, for drag and added mass [m]
+    depth : float — depth D [m]
+    """
+
+    length: float
+    EI: np.ndarray
+    mass_per_length: np.ndarray
+    point_masses: np.ndarray = field(default=None)  # type: ignore[assignment]
+    breadth: float = 12.0
+    depth: float = 5.4
+
+    def __post_init__(self):
+        EI = np.atleast_1d(np.asarray(self.EI, dtype=float))
+        m = np.atleast_1d(np.asarray(self.mass_per_length, dtype=float))
+        if not np.isfinite(self.length) or self.length <= 0:
+            raise InputError("hull.length_m", self.length, "must be a positive length [m]")
+        if EI.size != m.size:
+            raise InputError(
+                "hull", f"{EI.size} EI values, {m.size} masses", "need one of each per element"
+            )
+        if EI.size < 1:
+            raise InputError("hull.elements", EI.size, "need at least one element")
+        if not np.all(np.isfinite(EI)) or np.any(EI <= 0):
+            raise InputError("hull.bending_stiffness_Nm2", EI.min(), "must be positive [N m^2]")
+        if not np.all(np.isfinite(m)) or np.any(m <= 0):
+            raise InputError("hull.mass_per_length_kg_m", m.min(), "must be positive [kg/m]")
+        pm = self.point_masses
+        pm = np.zeros(EI.size + 1) if pm is None else np.asarray(pm, dtype=float)
+        if pm.shape != (EI.size + 1,) or np.any(pm < 0):
+            raise InputError("hull.point_masses", pm.tolist(), "one non-negative mass per node [kg]")
+        object.__setattr__(self, "EI", EI)
+        object.__setattr__(self, "mass_per_length", m)
+        object.__setattr__(self, "point_masses", pm)
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def uniform(
+        cls, length: float, EI: float, mass_per_length: float, elements: int, **kw
+    ) -> Hull:
+        """A uniform beam: ``elements`` equal elements of constant EI [N m^2] and mass [kg/m]."""
+        if int(elements) < 1:
+            raise InputError("hull.elements", elements, "need at least one element")
+        n = int(elements)
+        return cls(length, np.full(n, float(EI)), np.full(n, float(mass_per_length)), **kw)
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def n_elements(self) -> int:
+        return self.EI.size
+
+    @property
+    def n_nodes(self) -> int:
+        return self.EI.size + 1
+
+    @property
+    def element_length(self) -> float:
+        """Length of each (equal) element [m]."""
+        return self.length / self.n_elements
+
+    @property
+    def x_nodes(self) -> np.ndarray:
+        """Node positions from the aft end [m]."""
+        return np.linspace(0.0, self.length, self.n_nodes)
+
+    @property
+    def total_mass(self) -> float:
+        """Structural mass including point masses [kg]."""
+        return float(np.sum(self.mass_per_length) * self.element_length + self.point_masses.sum())
+
+    def nearest_node(self, x: float) -> int:
+        """0-based index of the node nearest to position ``x`` [m]."""
+        return int(np.clip(np.rint(x / self.element_length), 0, self.n_elements))
+
+    # ------------------------------------------------------------------ derived copies
+    def refined(self, elements: int) -> Hull:
+        """The same beam on ``elements`` equal elements (properties sampled at element centres;
+        point masses moved to the nearest new node)."""
+        if int(elements) < 1:
+            raise InputError("elements", elements, "need at least one element")
+        n = int(elements)
+        xc = (np.arange(n) + 0.5) * self.length / n
+        idx = np.minimum((xc / self.element_length).astype(int), self.n_elements - 1)
+        pm = np.zeros(n + 1)
+        for x, mass in zip(self.x_nodes, self.point_masses):
+            if mass:
+                pm[int(np.clip(np.rint(x / (self.length / n)), 0, n))] += mass
+        return replace(self, EI=self.EI[idx], mass_per_length=self.mass_per_length[idx], point_masses=pm)
+
+    def mirrored(self) -> Hull:
+        """The beam turned end for end (bow becomes stern)."""
+        return replace(
+            self,
+            EI=self.EI[::-1].copy(),
+            mass_per_length=self.mass_per_length[::-1].copy(),
+            point_masses=self.point_masses[::-1].copy(),
+        )
+
+
+def hull_from_scenario(scenario, elements: int | None = None) -> Hull:
+    """The SI :class:`Hull` of a :class:`~flexlift.scenario.Scenario` (optionally re-meshed)."""
+    h = scenario.hull
+    n = h.elements
+    if h.displacement_t is not None:
+        m = np.full(n, h.displacement_t * C.TONNE / h.length_m)
+    else:
+        m = np.broadcast_to(np.asarray(h.mass_per_length_kg_m, dtype=float), (n,)).copy()
+    EI = np.broadcast_to(np.asarray(h.bending_stiffness_Nm2, dtype=float), (n,)).copy()
+    pm = np.zeros(n + 1)
+    for p in h.point_masses:
+        pm[p.node - 1] += p.mass_t * C.TONNE
+    hull = Hull(h.length_m, EI, m, pm, breadth=h.breadth_m, depth=h.depth_m)
+    if elements is not None and int(elements) != n:
+        hull = hull.refined(int(elements))
+    return hull

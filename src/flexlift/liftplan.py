@@ -1,0 +1,220 @@
+"""Hydrostatics, bag sizing and bag layout (SPEC §1, §3).
+
+How much lift the wreck needs, how many bags of the catalogue size, how much each is modelled
+to lift, and where they go: external parachute bags at the nodes of a chosen flexible mode,
+internal cylindrical bags end to end over the ballast-tank span snapped to the element grid,
+or an explicit layout from the scenario.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+from typing import Literal
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.errors import InputError
+from flexlift.hull import Hull
+from flexlift.modes import Modes, mode_nodes
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Bag:
+    """One lift bag on the hull.
+
+    name : str — "bag_1", ... (externals aft to bow, then internals aft to bow)
+    kind : "external" (parachute, point load) or "internal" (cylindrical, uniform load)
+    x : float — point of action (external) or span centre (internal) [m from the aft end]
+    span : (x0, x1) or None — extent of an internal bag's uniform load [m]
+    node : int or None — 0-based node of an external bag when it sits on one
+    lift : float — rated (full) lift force [N]
+    capacity : float — gas volume at full lift, lift / (rho_sw g) [m^3]
+    """
+
+    name: str
+    kind: Literal["external", "internal"]
+    x: float
+    span: tuple[float, float] | None
+    node: int | None
+    lift: float
+    capacity: float
+
+
+@dataclass(frozen=True)
+class LiftPlan:
+    """The lift plan: weights [N], the bags, and any warnings (e.g. a shortfall)."""
+
+    dry_weight: float  # W, structural weight in air [N]
+    wet_weight: float  # W' = W (1 - rho_sw / rho_steel) [N]
+    breakout_factor: float  # required lift / wet weight [-]
+    required_lift: float  # breakout_factor * W' [N]
+    catalogue_lift: float  # lift of one catalogue bag [N]
+    bag_lift: float  # modelled lift per bag [N]
+    bags: tuple[Bag, ...]
+    gravity: float = C.G  # [m/s^2]
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def bag_count(self) -> int:
+        return len(self.bags)
+
+    @property
+    def total_lift(self) -> float:
+        """Sum of the bags' rated lifts [N]."""
+        return float(sum(b.lift for b in self.bags))
+
+    @property
+    def shortfall(self) -> float:
+        """Required lift the bags cannot carry, 0 when they suffice [N]."""
+        return max(0.0, self.required_lift - self.total_lift)
+
+    @property
+    def external(self) -> tuple[Bag, ...]:
+        return tuple(b for b in self.bags if b.kind == "external")
+
+    @property
+    def internal(self) -> tuple[Bag, ...]:
+        return tuple(b for b in self.bags if b.kind == "internal")
+
+    def bag(self, name: str) -> Bag:
+        for b in self.bags:
+            if b.name == name:
+                return b
+        raise InputError("bag", name, f"known bags are {', '.join(b.name for b in self.bags)}")
+
+
+def bag_count(required_lift_t: float, catalogue_lift_t: float) -> tuple[int, float]:
+    """The bag-count rule of SPEC §1: n = ceil(required / catalogue), and the modelled lift
+    per bag = required / n rounded up to the tonne. Inputs and output lift in tonnes."""
+    if required_lift_t <= 0 or catalogue_lift_t <= 0:
+        raise InputError("lift", (required_lift_t, catalogue_lift_t), "lifts must be positive [t]")
+    # guard exact multiples against round-off (3616.9999999 / 565 must not become 7.0000001)
+    ratio = required_lift_t / catalogue_lift_t
+    n = max(1, math.ceil(ratio - 1e-9))
+    per = required_lift_t / n
+    return n, float(math.ceil(per - 1e-9))
+
+
+def _snap(x: float, hull: Hull) -> float:
+    return float(hull.x_nodes[hull.nearest_node(x)])
+
+
+def plan_lift(scenario, hull: Hull, modes: Modes) -> LiftPlan:
+    """Size and lay out the bags of ``scenario`` on ``hull`` (whose ``modes`` place the
+    external bags)."""
+    env = scenario.environment
+    lift = scenario.lift
+    g, rho = env.gravity_m_s2, env.seawater_density_kg_m3
+    dry = hull.total_mass * g
+    wet = dry * (1.0 - rho / env.steel_density_kg_m3)
+    required = lift.breakout_factor * wet
+    cat = lift.catalogue_bag.lift_t * C.TONNE * g
+    n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)
+    if lift.bag_lift_t is not None:
+        per_t = lift.bag_lift_t
+    per = per_t * C.TONNE * g
+
+    def make(name, kind, x, span, node, lift_force):
+        return Bag(name, kind, float(x), span, node, float(lift_force), lift_force / (rho * g))
+
+    bags: list[Bag] = []
+    if lift.bags is not None:
+        bags = _explicit_bags(lift.bags, hull, per, g, make)
+    else:
+        n_int = min(lift.internal_bags, n)
+        n_ext = n - n_int
+        if n_ext:
+            col = modes.flexible_index(lift.layout_flexible_mode)
+            nodes = mode_nodes(modes, col)
+            if len(nodes) != n_ext:
+                raise InputError(
+                    "lift.layout_flexible_mode",
+                    lift.layout_flexible_mode,
+                    f"flexible mode {lift.layout_flexible_mode} has {len(nodes)} nodes but the "
+                    f"plan needs {n_ext} external bags; use mode {n_ext - 1} or list lift.bags",
+                )
+            for k, node in enumerate(nodes):
+                bags.append(make(f"bag_{k + 1}", "external", hull.x_nodes[node], None, node, per))
+        if n_int:
+            fs = scenario.hull.frame_spacing_m
+            f0, f1 = scenario.hull.ballast_tank_frames
+            x0, x1 = _snap(f0 * fs, hull), _snap(f1 * fs, hull)
+            if not 0 <= f0 * fs < f1 * fs <= hull.length or x1 <= x0:
+                raise InputError(
+                    "hull.ballast_tank_frames",
+                    [f0, f1],
+                    f"the tank span must lie on the hull, 0..{hull.length / fs:.0f} frames",
+                )
+            edges = np.linspace(x0, x1, n_int + 1)
+            for k in range(n_int):
+                a, b = float(edges[k]), float(edges[k + 1])
+                bags.append(
+                    make(f"bag_{n_ext + k + 1}", "internal", 0.5 * (a + b), (a, b), None, per)
+                )
+
+    plan = LiftPlan(
+        dry_weight=dry,
+        wet_weight=wet,
+        breakout_factor=lift.breakout_factor,
+        required_lift=required,
+        catalogue_lift=cat,
+        bag_lift=per,
+        bags=tuple(bags),
+        gravity=g,
+    )
+    warnings = []
+    if plan.shortfall > 0:
+        short_t = plan.shortfall / (C.TONNE * g)
+        warnings.append(
+            f"lift shortfall: the bags carry {plan.total_lift / (C.TONNE * g):.0f} t of the "
+            f"{required / (C.TONNE * g):.0f} t required ({short_t:.0f} t short); add a bag or "
+            "raise bag_lift_t"
+        )
+        log.warning(warnings[-1])
+    return replace(plan, warnings=tuple(warnings))
+
+
+def _explicit_bags(specs, hull: Hull, default_lift: float, g: float, make) -> list[Bag]:
+    """Bags listed in the scenario; default_lift [N], g [m/s^2]."""
+    L = hull.length
+    bags: list[Bag] = []
+    for s in specs:
+        lift_force = default_lift if s.lift_t is None else s.lift_t * C.TONNE * g
+        if s.kind == "external":
+            if s.node is not None:
+                if s.node > hull.n_nodes:
+                    raise InputError(
+                        f"lift.bags.{s.name}.node", s.node, f"nodes are 1..{hull.n_nodes}"
+                    )
+                node = s.node - 1
+                x = float(hull.x_nodes[node])
+            else:
+                x = float(s.x_m)
+                if not 0 <= x <= L:
+                    raise InputError(
+                        f"lift.bags.{s.name}.x_m", x, f"must lie on the hull, 0..{L} m"
+                    )
+                near = hull.nearest_node(x)
+                node = near if abs(hull.x_nodes[near] - x) < 1e-9 * L else None
+            bags.append(make(s.name, "external", x, None, node, lift_force))
+        else:
+            a, b = (float(v) for v in s.span_m)
+            if not (0 <= a < b <= L):
+                raise InputError(
+                    f"lift.bags.{s.name}.span_m", [a, b], f"must lie on the hull, within 0..{L} m"
+                )
+            bags.append(make(s.name, "internal", 0.5 * (a + b), (a, b), None, lift_force))
+    spans = sorted((b.span, b.name) for b in bags if b.span is not None)
+    for (s1, n1), (s2, n2) in zip(spans, spans[1:]):
+        if s2[0] < s1[1] - 1e-9:
+            raise InputError(
+                "lift.bags",
+                f"{n1} {list(s1)} and {n2} {list(s2)}",
+                "internal bags must not overlap; shorten or move one",
+            )
+    return bags

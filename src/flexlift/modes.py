@@ -1,0 +1,189 @@
+"""Free-free eigen analysis: clean rigid modes, mass-normalised flexible modes, nodes of a mode.
+
+The generalised problem K phi = omega^2 M phi of a free-free beam has two rigid modes (heave
+and pitch, omega = 0). Numerical solvers return them polluted by round-off, so they are built
+exactly here (heave: w = 1; pitch: w = x - x_G, theta = 1; mass-orthonormalised) and the
+flexible modes are solved in their M-orthogonal complement.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from flexlift.beam import Beam, assemble, shape_functions
+from flexlift.errors import InputError
+from flexlift.hull import Hull
+
+log = logging.getLogger(__name__)
+
+#: beta_n L of the first free-free flexible modes of a uniform beam
+BETA_L_FREE_FREE = np.array([4.7300408, 7.8532046, 10.9956078, 14.1371655, 17.2787597])
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Modes of a free-free beam.
+
+    omega : ndarray (m,) — natural circular frequencies, ascending; the first ``n_rigid``
+        are exactly 0 [rad/s]
+    phi : ndarray (N, m) — mass-normalised mode shapes (phi.T M phi = I), DOF order
+        [w_0, theta_0, w_1, ...] [m/sqrt(kg) and rad/sqrt(kg)]
+    hull : Hull — the structure
+    n_rigid : int — number of rigid modes (2 for a free-free beam)
+    """
+
+    omega: np.ndarray
+    phi: np.ndarray
+    hull: Hull
+    n_rigid: int = 2
+
+    @property
+    def n_modes(self) -> int:
+        return self.omega.size
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        """Natural frequencies [Hz]."""
+        return self.omega / (2 * np.pi)
+
+    @property
+    def displacement(self) -> np.ndarray:
+        """Vertical displacement of each mode at each node, shape (n_nodes, m)."""
+        return self.phi[0::2]
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """Rotation of each mode at each node, shape (n_nodes, m)."""
+        return self.phi[1::2]
+
+    def flexible_index(self, k: int) -> int:
+        """0-based column of the k-th flexible mode (k = 1 is the first flexible mode)."""
+        if not 1 <= k <= self.n_modes - self.n_rigid:
+            raise InputError(
+                "flexible mode",
+                k,
+                f"the model has flexible modes 1..{self.n_modes - self.n_rigid}",
+            )
+        return self.n_rigid + k - 1
+
+    def unit_peak(self) -> np.ndarray:
+        """Displacement shapes scaled to a peak of +1 (for plotting), shape (n_nodes, m)."""
+        w = self.displacement
+        idx = np.argmax(np.abs(w), axis=0)
+        peak = w[idx, np.arange(w.shape[1])]
+        return w / np.where(peak == 0, 1.0, peak)
+
+    def shape_at(self, x: np.ndarray) -> np.ndarray:
+        """Mode displacements interpolated with the Hermite shape functions at x [m],
+        shape (len(x), m)."""
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        hull = self.hull
+        l = hull.element_length
+        e = np.clip((x / l).astype(int), 0, hull.n_elements - 1)
+        xi = x / l - e
+        N = shape_functions(xi, l)  # (nx, 4)
+        dofs = 2 * e[:, None] + np.arange(4)[None, :]  # (nx, 4)
+        return np.einsum("pk,pkm->pm", N, self.phi[dofs])
+
+
+def rigid_modes(beam: Beam) -> np.ndarray:
+    """Exact mass-orthonormal heave and pitch shapes, shape (N, 2)."""
+    x = beam.hull.x_nodes
+    n = beam.n_dof
+    heave = np.zeros(n)
+    heave[0::2] = 1.0
+    heave /= np.sqrt(heave @ (beam.M @ heave))
+    # pitch about the centre of mass: M-orthogonal to heave by construction
+    arm = np.zeros(n)
+    arm[0::2] = x
+    x_g = (heave @ (beam.M @ arm)) * heave[0]  # M-weighted mean of x (heave is constant)
+    pitch = np.zeros(n)
+    pitch[0::2] = x - x_g
+    pitch[1::2] = 1.0
+    pitch -= (heave @ (beam.M @ pitch)) * heave  # round-off clean-up
+    pitch /= np.sqrt(pitch @ (beam.M @ pitch))
+    return np.column_stack([heave, pitch])
+
+
+def _complement_basis(beam: Beam, R: np.ndarray) -> np.ndarray:
+    """Orthonormal basis (N, N-2) of the vectors M-orthogonal to the rigid modes R."""
+    MR = np.asarray(beam.M @ R)
+    return sla.null_space(MR.T)
+
+
+def _dense_flexible(beam: Beam, R: np.ndarray, n_flex: int) -> tuple[np.ndarray, np.ndarray]:
+    Q = _complement_basis(beam, R)
+    K = beam.K.toarray()
+    M = beam.M.toarray()
+    Kc = Q.T @ K @ Q
+    Mc = Q.T @ M @ Q
+    Kc = 0.5 * (Kc + Kc.T)
+    Mc = 0.5 * (Mc + Mc.T)
+    lam, y = sla.eigh(Kc, Mc, subset_by_index=[0, n_flex - 1])
+    return lam, Q @ y
+
+
+def compute_modes(
+    hull: Hull | Beam, n_modes: int | None = None, solver: str = "auto"
+) -> Modes:
+    """Modes of a free-free beam: two exact rigid modes then the lowest flexible ones.
+
+    hull : the structure (or an assembled :class:`Beam`)
+    n_modes : total number of modes wanted, rigid included (default: all, 2 per node)
+    solver : "dense", "sparse" or "auto" (dense up to 400 elements)
+    """
+    beam = hull if isinstance(hull, Beam) else assemble(hull)
+    n_dof = beam.n_dof
+    if n_modes is None:
+        n_modes = n_dof
+    n_modes = int(n_modes)
+    if not 3 <= n_modes <= n_dof:
+        raise InputError("modes", n_modes, f"need 3..{n_dof} modes for this mesh (2 rigid + flexible)")
+    if solver == "auto":
+        solver = "dense" if beam.hull.n_elements <= 400 else "sparse"
+    if solver not in ("dense", "sparse"):
+        raise InputError("solver", solver, "use 'dense', 'sparse' or 'auto'")
+    R = rigid_modes(beam)
+    n_flex = n_modes - 2
+    if solver == "dense":
+        lam, V = _dense_flexible(beam, R, n_flex)
+    else:
+        from flexlift.modes_sparse import sparse_flexible
+
+        lam, V = sparse_flexible(beam, R, n_flex)
+    # mass-normalise (eigh already does; repeat against round-off of the projection)
+    norms = np.sqrt(np.einsum("ij,ij->j", V, np.asarray(beam.M @ V)))
+    V = V / norms
+    # a sign convention: the bow displacement of each mode is positive
+    sign = np.sign(V[-2])
+    sign[sign == 0] = 1.0
+    V = V * sign
+    omega = np.concatenate([[0.0, 0.0], np.sqrt(np.clip(lam, 0.0, None))])
+    return Modes(omega=omega, phi=np.column_stack([R, V]), hull=beam.hull, n_rigid=2)
+
+
+def zero_crossings(modes: Modes, column: int, samples_per_element: int = 50) -> np.ndarray:
+    """Positions [m] where mode ``column`` (0-based) changes sign, from its Hermite interpolant."""
+    x = np.linspace(0.0, modes.hull.length, modes.hull.n_elements * samples_per_element + 1)
+    w = modes.shape_at(x)[:, column]
+    s = np.sign(w)
+    k = np.nonzero(s[:-1] * s[1:] < 0)[0]
+    return x[k] - w[k] * (x[k + 1] - x[k]) / (w[k + 1] - w[k])
+
+
+def mode_nodes(modes: Modes, column: int) -> list[int]:
+    """0-based indices of the nodes nearest the zero crossings of mode ``column`` (0-based)."""
+    return [modes.hull.nearest_node(xc) for xc in zero_crossings(modes, column)]
+
+
+def analytic_free_free_hz(hull: Hull, n: int = 5) -> np.ndarray:
+    """First ``n`` (<= 5) flexible frequencies of the uniform free-free beam [Hz]:
+    f = (beta L)^2 / (2 pi L^2) sqrt(EI / m)."""
+    EI = float(hull.EI.mean())
+    m = float(hull.mass_per_length.mean())
+    bl = BETA_L_FREE_FREE[:n]
+    return bl**2 / (2 * np.pi * hull.length**2) * np.sqrt(EI / m)
