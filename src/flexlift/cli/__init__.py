@@ -19,7 +19,7 @@ from flexlift import __version__
 from flexlift.errors import InputError
 
 #: sub-command modules, in the order of the analysis
-COMMANDS = ("run", "modes", "loads", "reduce", "fuzzy", "simulate", "sweep")
+COMMANDS = ("run", "modes", "loads", "reduce", "fuzzy", "simulate")
 
 
 class _Parser(argparse.ArgumentParser):
