@@ -1,0 +1,186 @@
+"""``flexlift run``: every stage on one scenario, into one output folder with a report.
+
+The folder (default ``flexlift-out/<scenario name>/``) is built in a temporary sibling and
+swapped in only when complete: an interrupted or failed run leaves the previous one intact.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import time
+import typing
+from pathlib import Path
+
+from flexlift import __version__
+from flexlift._io import atomic_dir, write_json, write_text
+from flexlift.cli._common import (
+    add_scenario_arg,
+    check_out_dir,
+    emit_json,
+    scenario_from,
+)
+from flexlift.errors import InputError
+from flexlift.outputs import StageOutput
+from flexlift.report import STAGE_TITLES, render_report
+from flexlift.scenario import ControlMode
+
+STAGES = ("modes", "loads", "reduce", "fuzzy", "simulate")
+CONTROL_MODES = typing.get_args(ControlMode)
+DEFAULT_CONTROLS = ("decentralized", "coordinated")
+
+
+def _csv_list(kind: str, allowed: tuple[str, ...]):
+    def parse(text: str) -> tuple[str, ...]:
+        items = tuple(s.strip() for s in text.split(",") if s.strip())
+        bad = [s for s in items if s not in allowed]
+        if bad or not items:
+            raise argparse.ArgumentTypeError(
+                f"{kind} {','.join(bad) or repr(text)} not known; choose from {','.join(allowed)}"
+            )
+        return items
+
+    return parse
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "run",
+        help="the whole analysis: modes, lift plan, reduction, fuzzy controller, ascent, report",
+        description=__doc__,
+    )
+    add_scenario_arg(p)
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="output folder (default: flexlift-out/<scenario name>)",
+    )
+    p.add_argument(
+        "--stages",
+        type=_csv_list("stage", STAGES),
+        default=STAGES,
+        help=f"comma-separated subset of {','.join(STAGES)} (default: all)",
+    )
+    p.add_argument(
+        "--control",
+        type=_csv_list("control mode", CONTROL_MODES),
+        default=DEFAULT_CONTROLS,
+        help=f"control modes to simulate and compare, from {','.join(CONTROL_MODES)} "
+        f"(default: {','.join(DEFAULT_CONTROLS)})",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress on the terminal")
+    p.add_argument("--json", action="store_true", help="print summary.json on stdout")
+    p.set_defaults(func=_main)
+
+
+class Progress:
+    """Stage-by-stage lines and a simulation bar on stderr (silent when quiet)."""
+
+    def __init__(self, quiet: bool, stream=None):
+        self.quiet = quiet
+        self.stream = stream or sys.stderr
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self._last = -1
+
+    def stage(self, k: int, n: int, text: str) -> None:
+        if not self.quiet:
+            self.stream.write(f"[{k}/{n}] {text}\n")
+            self.stream.flush()
+
+    def bar(self, fraction: float, label: str = "") -> None:
+        if self.quiet:
+            return
+        pct = int(100 * min(max(fraction, 0.0), 1.0))
+        if self.tty:
+            filled = pct * 30 // 100
+            self.stream.write(f"\r      {label} [{'#' * filled}{'.' * (30 - filled)}] {pct:3d}%")
+            if pct == 100:
+                self.stream.write("\n")
+            self.stream.flush()
+        elif pct // 25 != self._last // 25 or pct == 100 and self._last != 100:
+            self.stream.write(f"      {label} {pct}%\n")
+            self.stream.flush()
+        self._last = pct
+
+
+def run_all(
+    scenario,
+    out: Path,
+    stages: tuple[str, ...] = STAGES,
+    controls: tuple[str, ...] = DEFAULT_CONTROLS,
+    progress: Progress | None = None,
+) -> list[StageOutput]:
+    """Run ``stages`` into the folder ``out`` (already created); return their outputs."""
+    progress = progress or Progress(quiet=True)
+    outputs: list[StageOutput] = []
+    n = len(stages)
+    for k, name in enumerate(stages, start=1):
+        module = importlib.import_module(f"flexlift.cli.{name}")
+        title = STAGE_TITLES.get(name, name).split(". ", 1)[-1]
+        if name == "simulate":
+            progress.stage(k, n, f"{title}: {', '.join(controls)}")
+            for mode in controls:
+                outputs.append(
+                    module.run_stage(
+                        scenario,
+                        out,
+                        control=mode,
+                        progress=lambda f, m=mode: progress.bar(f, m),
+                    )
+                )
+            if len(controls) > 1:
+                outputs.append(module.compare_stage(outputs[-len(controls):], out))
+        else:
+            progress.stage(k, n, title)
+            outputs.append(module.run_stage(scenario, out))
+    return outputs
+
+
+def summary_of(scenario, outputs: list[StageOutput], elapsed_s: float) -> dict:
+    """summary.json: the headline numbers of every stage under the stage's name."""
+    stages: dict = {}
+    for o in outputs:
+        if o.name.startswith("simulate:"):
+            stages.setdefault("simulate", {})[o.name.split(":", 1)[1]] = o.summary
+        elif o.name != "compare":
+            stages[o.name] = o.summary
+    criteria = {f"{o.name}.{k}": bool(v) for o in outputs for k, v in o.criteria.items()}
+    return {
+        "flexlift_version": __version__,
+        "scenario": scenario.name,
+        "scenario_checksum": scenario.checksum(),
+        "elapsed_s": round(elapsed_s, 2),
+        "all_criteria_passed": all(criteria.values()) if criteria else None,
+        "criteria": criteria,
+        "warnings": [w for o in outputs for w in o.warnings],
+        "stages": stages,
+    }
+
+
+def _main(args: argparse.Namespace) -> int:
+    scenario = scenario_from(args)
+    out = args.out if args.out is not None else Path("flexlift-out") / scenario.name
+    check_out_dir(out)
+    progress = Progress(quiet=args.quiet)
+    t0 = time.perf_counter()
+    try:
+        with atomic_dir(out) as tmp:
+            outputs = run_all(scenario, tmp, args.stages, args.control, progress)
+            summary = summary_of(scenario, outputs, time.perf_counter() - t0)
+            write_text(tmp / "scenario.yaml", scenario.to_yaml())
+            write_json(tmp / "summary.json", summary)
+            write_text(tmp / "report.html", render_report(scenario, outputs))
+    except OSError as exc:  # e.g. a full disk: the previous output is untouched
+        raise InputError("--out", str(out), f"could not write the output ({exc.strerror})") from None
+    if args.json:
+        emit_json(summary)
+    if not args.quiet:
+        verdict = summary["all_criteria_passed"]
+        status = {True: "all criteria passed", False: "SOME CRITERIA FAILED", None: "no criteria"}
+        sys.stderr.write(
+            f"done in {summary['elapsed_s']:.1f} s: {status[verdict]}, "
+            f"{len(summary['warnings'])} warning(s)\nreport: {out / 'report.html'}\n"
+        )
+    return 0

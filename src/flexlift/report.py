@@ -1,0 +1,158 @@
+"""The report page: one self-contained HTML file (figures embedded), readable when printed.
+
+:func:`render_report` takes the scenario and the stages' :class:`~flexlift.outputs.StageOutput`
+and returns the HTML text; writing it is the caller's business.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+from datetime import datetime, timezone
+
+from flexlift import __version__
+from flexlift.outputs import StageOutput
+
+STAGE_TITLES = {
+    "modes": "1. Modal analysis of the hull",
+    "loads": "2. Lift plan and longitudinal strength",
+    "reduce": "3. State space and model reduction",
+    "fuzzy": "4. Supervisory fuzzy controller",
+    "simulate": "5. Controlled ascent",
+}
+
+_CSS = """
+body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; max-width: 60rem;
+       margin: 2rem auto; padding: 0 1rem; color: #1d2330; line-height: 1.45; }
+h1 { font-size: 1.6rem; border-bottom: 3px solid #1f4e79; padding-bottom: .3rem; }
+h2 { font-size: 1.25rem; color: #1f4e79; margin-top: 2.2rem; border-bottom: 1px solid #c9d3e0; }
+h3 { font-size: 1.05rem; margin-bottom: .3rem; }
+table { border-collapse: collapse; margin: .6rem 0 1rem; font-size: .88rem; }
+th, td { border: 1px solid #c9d3e0; padding: .25rem .55rem; text-align: right; }
+th { background: #eef3f9; text-align: center; }
+td:first-child, th:first-child { text-align: left; }
+figure { margin: 1rem 0; page-break-inside: avoid; }
+figure img { max-width: 100%; border: 1px solid #e1e6ee; }
+figcaption { font-size: .85rem; color: #4a5568; }
+.pass { color: #17703a; font-weight: bold; }
+.fail { color: #b42318; font-weight: bold; }
+.verdict { font-size: 1.1rem; padding: .6rem .9rem; border-radius: 4px; margin: 1rem 0; }
+.verdict.ok { background: #e7f5ec; border: 1px solid #17703a; }
+.verdict.bad { background: #fdecea; border: 1px solid #b42318; }
+.warn { background: #fff7e0; border-left: 4px solid #d69e2e; padding: .4rem .8rem; margin: .5rem 0; }
+.meta { font-size: .85rem; color: #4a5568; }
+nav ol { columns: 2; font-size: .9rem; }
+@media print { body { max-width: none; margin: 0; } h2 { page-break-before: auto; }
+               a { color: inherit; text-decoration: none; } }
+"""
+
+
+def _e(x) -> str:
+    return html.escape(str(x))
+
+
+def _cell(v) -> str:
+    if isinstance(v, bool):
+        return f'<span class="{"pass" if v else "fail"}">{"PASS" if v else "FAIL"}</span>'
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "–"
+        if v != 0 and (abs(v) >= 1e5 or abs(v) < 1e-3):
+            return f"{v:.4g}"
+        return f"{v:.4g}" if abs(v) < 10 else f"{v:,.1f}"
+    if v is None:
+        return "–"
+    return _e(v)
+
+
+def _table(t) -> str:
+    head = "".join(f"<th>{_e(c)}</th>" for c in t.columns)
+    body = "".join("<tr>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>" for row in t.rows)
+    note = f'<p class="meta">{_e(t.note)}</p>' if t.note else ""
+    return f"<h3>{_e(t.title)}</h3><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>{note}"
+
+
+def _figure(fig) -> str:
+    data = base64.b64encode(fig.path.read_bytes()).decode("ascii")
+    return (
+        f'<figure><img alt="{_e(fig.caption)}" src="data:image/png;base64,{data}">'
+        f"<figcaption>{_e(fig.caption)}</figcaption></figure>"
+    )
+
+
+def _criteria(criteria: dict[str, bool]) -> str:
+    rows = "".join(
+        f"<tr><td>{_e(k.replace('_', ' '))}</td><td>{_cell(bool(v))}</td></tr>"
+        for k, v in criteria.items()
+    )
+    return f"<table><thead><tr><th>criterion</th><th>result</th></tr></thead><tbody>{rows}</tbody></table>"
+
+
+def _particulars(scenario) -> str:
+    h, env, c = scenario.hull, scenario.environment, scenario.control
+    mass = f"{h.displacement_t:g} t" if h.displacement_t is not None else "per element (see scenario)"
+    ei = h.bending_stiffness_Nm2
+    ei = f"{ei:.3g} N m²" if not isinstance(ei, list) else "per element (see scenario)"
+    rows = [
+        ("Length overall L", f"{h.length_m:g} m"),
+        ("Breadth / depth", f"{h.breadth_m:g} m / {h.depth_m:g} m"),
+        ("Structural mass", mass),
+        ("Bending stiffness EI", ei),
+        ("Finite elements", f"{h.elements}"),
+        ("Water depth at the wreck", f"{env.water_depth_m:g} m"),
+        ("Target height above the seabed", f"{c.target_height_m:g} m"),
+        ("Planned ascent speed", f"{c.ascent_speed_m_s:g} m/s"),
+        ("Limits", f"ascent < {scenario.limits.ascent_velocity_m_s:g} m/s, "
+                   f"pitch < {scenario.limits.pitch_deg:g}°, no surface breach"),
+    ]
+    body = "".join(f"<tr><td>{_e(a)}</td><td>{_e(b)}</td></tr>" for a, b in rows)
+    return f"<table><tbody>{body}</tbody></table>"
+
+
+def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
+    """The whole report as one HTML page (figures embedded as base64 PNG)."""
+    generated = generated or datetime.now(timezone.utc)
+    criteria = {f"{s.name}: {k}": v for s in stages for k, v in s.criteria.items()}
+    warnings = [w for s in stages for w in s.warnings]
+    ok = all(criteria.values()) and not warnings
+    if not criteria:
+        verdict = '<div class="verdict bad">No acceptance criteria were evaluated (the ascent was not simulated).</div>'
+    elif ok:
+        verdict = '<div class="verdict ok"><b>Lift plan acceptable:</b> every criterion passed and no warnings.</div>'
+    else:
+        failed = [k for k, v in criteria.items() if not v]
+        text = f"{len(failed)} criterion(s) failed: {', '.join(failed)}" if failed else "all criteria passed"
+        if warnings:
+            text += f"; {len(warnings)} warning(s)"
+        verdict = f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.</div>'
+    nav = "".join(
+        f'<li><a href="#{s.name}">{_e(STAGE_TITLES.get(s.name, s.name))}</a></li>' for s in stages
+    )
+    parts = [
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+        f"<title>flexlift report: {_e(scenario.name)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>flexlift report — {_e(scenario.name)}</h1>",
+        f"<p>{_e(scenario.description)}</p>" if scenario.description else "",
+        f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
+        f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC</p>",
+        verdict,
+        f"<nav><ol>{nav}</ol></nav>",
+        '<h2 id="particulars">Particulars</h2>',
+        _particulars(scenario),
+    ]
+    if criteria:
+        parts += ['<h2 id="criteria">Acceptance criteria</h2>', _criteria(criteria)]
+    if warnings:
+        parts += ['<h2 id="warnings">Warnings</h2>'] + [f'<div class="warn">{_e(w)}</div>' for w in warnings]
+    for s in stages:
+        parts.append(f'<h2 id="{_e(s.name)}">{_e(STAGE_TITLES.get(s.name, s.name))}</h2>')
+        lead = s.summary.get("conclusion") if isinstance(s.summary, dict) else None
+        if lead:
+            parts.append(f"<p>{_e(lead)}</p>")
+        for w in s.warnings:
+            parts.append(f'<div class="warn">{_e(w)}</div>')
+        parts += [_table(t) for t in s.tables]
+        parts += [_figure(f) for f in s.figures]
+    parts.append("</body></html>")
+    return "\n".join(p for p in parts if p)
