@@ -55,6 +55,20 @@ def shape_functions(xi: np.ndarray, l: float) -> np.ndarray:
     )
 
 
+def element_deformation(l: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """The factor form of the element stiffness: ``element_stiffness(EI, l) = EI/l^3 G^T C G``.
+
+    Returns (G, C) for the scaled DOFs [w_a, l theta_a, w_b, l theta_b]: G (2x4) maps them to
+    the element's two deformations, d_1 = w_a + l theta_a - w_b and d_2 = w_a - w_b + l theta_b
+    (end rotations relative to the chord, times l), and C = [[4, 2], [2, 4]]. Rigid motions
+    (w = a + b x, theta = b) give d = 0 exactly, which is what keeps the rigid modes clean.
+    """
+    del l  # the scaled form is independent of the length
+    G = np.array([[1.0, 1.0, -1.0, 0.0], [1.0, 0.0, -1.0, 1.0]])
+    C = np.array([[4.0, 2.0], [2.0, 4.0]])
+    return G, C
+
+
 def _assemble(blocks: np.ndarray, n_el: int) -> sp.csc_matrix:
     """Sum per-element 4x4 ``blocks`` (n_el, 4, 4) into a sparse global matrix."""
     dofs = 2 * np.arange(n_el)[:, None] + np.arange(4)[None, :]
@@ -80,6 +94,25 @@ class Beam:
     @property
     def n_dof(self) -> int:
         return self.K.shape[0]
+
+
+def dof_scale(hull: Hull) -> np.ndarray:
+    """Per-DOF scale s with [w, theta] = s * [w, l theta]: 1 for displacements, 1/l for
+    rotations (l the element length [m]). With it K and M have entries of one size per block."""
+    s = np.ones(2 * hull.n_nodes)
+    s[1::2] = 1.0 / hull.element_length
+    return s
+
+
+def deformation_matrix(hull: Hull) -> sp.csr_matrix:
+    """Sparse D (2 n_el x N) of 0/+-1 mapping the scaled DOFs [w, l theta] to element
+    deformations; the scaled stiffness is D^T W D with W = blockdiag(EI_e / l^3 C)."""
+    n = hull.n_elements
+    G, _ = element_deformation()
+    rows = np.repeat(np.arange(2 * n).reshape(n, 2), 4, axis=1).ravel()
+    cols = np.tile((2 * np.arange(n)[:, None] + np.arange(4)[None, :]), (1, 2)).ravel()
+    vals = np.tile(G.ravel(), n)
+    return sp.csr_matrix((vals, (rows, cols)), shape=(2 * n, 2 * hull.n_nodes))
 
 
 def assemble(hull: Hull, extra_mass_per_length: np.ndarray | float = 0.0) -> Beam:

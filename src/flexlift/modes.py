@@ -21,7 +21,11 @@ from flexlift.hull import Hull
 log = logging.getLogger(__name__)
 
 #: beta_n L of the first free-free flexible modes of a uniform beam
-BETA_L_FREE_FREE = np.array([4.7300408, 7.8532046, 10.9956078, 14.1371655, 17.2787597])
+#: (roots of cos(bL) cosh(bL) = 1, to double precision)
+BETA_L_FREE_FREE = np.array(
+    [4.730040744862704, 7.853204624095838, 10.995607838001671, 14.137165491257464,
+     17.278759657399480]
+)
 
 
 @dataclass(frozen=True)
@@ -127,24 +131,34 @@ def _dense_flexible(beam: Beam, R: np.ndarray, n_flex: int) -> tuple[np.ndarray,
     return lam, Q @ y
 
 
+#: with ``n_modes=None``, models above this many elements get the lowest DEFAULT_LARGE_MODES
+LARGE_MODEL_ELEMENTS = 400
+DEFAULT_LARGE_MODES = 22
+
+
 def compute_modes(
     hull: Hull | Beam, n_modes: int | None = None, solver: str = "auto"
 ) -> Modes:
     """Modes of a free-free beam: two exact rigid modes then the lowest flexible ones.
 
     hull : the structure (or an assembled :class:`Beam`)
-    n_modes : total number of modes wanted, rigid included (default: all, 2 per node)
-    solver : "dense", "sparse" or "auto" (dense up to 400 elements)
+    n_modes : total number of modes wanted, rigid included (default: all, 2 per node, up to
+        400 elements; 22 = 2 rigid + 20 flexible above that) [-]
+    solver : "sparse" (flexibility Lanczos of :mod:`flexlift.modes_sparse`: O(N) memory,
+        accurate to round-off at any mesh size), "dense" (generalised ``eigh`` of K and M
+        projected on the complement of the rigid modes: O(N^2) memory, O(N^3) time, loses
+        digits as eps * (N / 4.73)^4 on fine meshes), or "auto" (sparse)
     """
     beam = hull if isinstance(hull, Beam) else assemble(hull)
     n_dof = beam.n_dof
     if n_modes is None:
-        n_modes = n_dof
+        large = beam.hull.n_elements > LARGE_MODEL_ELEMENTS
+        n_modes = min(n_dof, DEFAULT_LARGE_MODES) if large else n_dof
     n_modes = int(n_modes)
     if not 3 <= n_modes <= n_dof:
         raise InputError("modes", n_modes, f"need 3..{n_dof} modes for this mesh (2 rigid + flexible)")
     if solver == "auto":
-        solver = "dense" if beam.hull.n_elements <= 400 else "sparse"
+        solver = "sparse"
     if solver not in ("dense", "sparse"):
         raise InputError("solver", solver, "use 'dense', 'sparse' or 'auto'")
     R = rigid_modes(beam)
