@@ -129,8 +129,21 @@ def plan_lift(scenario, hull: Hull, modes: Modes) -> LiftPlan:
         n_int = min(lift.internal_bags, n)
         n_ext = n - n_int
         if n_ext:
-            col = modes.flexible_index(lift.layout_flexible_mode)
-            nodes = mode_nodes(modes, col)
+            n_flex = modes.n_modes - modes.n_rigid
+            if lift.layout_flexible_mode > n_flex:
+                raise InputError(
+                    "lift.layout_flexible_mode",
+                    lift.layout_flexible_mode,
+                    f"the model has flexible modes 1..{n_flex}; choose one of them or list lift.bags",
+                )
+            nodes = mode_nodes(modes, modes.flexible_index(lift.layout_flexible_mode))
+            if len(set(nodes)) != len(nodes):
+                raise InputError(
+                    "lift.layout_flexible_mode",
+                    lift.layout_flexible_mode,
+                    f"the nodes of flexible mode {lift.layout_flexible_mode} fall on the same "
+                    f"beam node ({[k + 1 for k in nodes]}); use more hull.elements or list lift.bags",
+                )
             if len(nodes) != n_ext:
                 raise InputError(
                     "lift.layout_flexible_mode",
