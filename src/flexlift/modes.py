@@ -81,9 +81,9 @@ class Modes:
         peak = w[idx, np.arange(w.shape[1])]
         return w / np.where(peak == 0, 1.0, peak)
 
-    def shape_at(self, x: np.ndarray) -> np.ndarray:
+    def shape_at(self, x: np.ndarray, columns=None) -> np.ndarray:
         """Mode displacements interpolated with the Hermite shape functions at x [m],
-        shape (len(x), m)."""
+        shape (len(x), m) (or (len(x), len(columns)) for the chosen 0-based ``columns``)."""
         x = np.atleast_1d(np.asarray(x, dtype=float))
         hull = self.hull
         l = hull.element_length
@@ -91,7 +91,8 @@ class Modes:
         xi = x / l - e
         N = shape_functions(xi, l)  # (nx, 4)
         dofs = 2 * e[:, None] + np.arange(4)[None, :]  # (nx, 4)
-        return np.einsum("pk,pkm->pm", N, self.phi[dofs])
+        phi = self.phi if columns is None else self.phi[:, np.atleast_1d(columns)]
+        return np.einsum("pk,pkm->pm", N, phi[dofs])
 
 
 def rigid_modes(beam: Beam) -> np.ndarray:
@@ -134,6 +135,8 @@ def _dense_flexible(beam: Beam, R: np.ndarray, n_flex: int) -> tuple[np.ndarray,
 #: with ``n_modes=None``, models above this many elements get the lowest DEFAULT_LARGE_MODES
 LARGE_MODEL_ELEMENTS = 400
 DEFAULT_LARGE_MODES = 22
+#: largest model (DOFs) the dense solver accepts (~130 MB per dense matrix)
+DENSE_MAX_DOF = 4002
 
 
 def compute_modes(
@@ -161,6 +164,12 @@ def compute_modes(
         solver = "sparse"
     if solver not in ("dense", "sparse"):
         raise InputError("solver", solver, "use 'dense', 'sparse' or 'auto'")
+    if solver == "dense" and n_dof > DENSE_MAX_DOF:
+        raise InputError(
+            "solver", "dense",
+            f"dense needs O(N^2) memory; use it up to {DENSE_MAX_DOF // 2 - 1} elements "
+            f"(this mesh has {beam.hull.n_elements}), or 'sparse'",
+        )
     R = rigid_modes(beam)
     n_flex = n_modes - 2
     if solver == "dense":
@@ -180,10 +189,15 @@ def compute_modes(
     return Modes(omega=omega, phi=np.column_stack([R, V]), hull=beam.hull, n_rigid=2)
 
 
-def zero_crossings(modes: Modes, column: int, samples_per_element: int = 50) -> np.ndarray:
-    """Positions [m] where mode ``column`` (0-based) changes sign, from its Hermite interpolant."""
-    x = np.linspace(0.0, modes.hull.length, modes.hull.n_elements * samples_per_element + 1)
-    w = modes.shape_at(x)[:, column]
+def zero_crossings(modes: Modes, column: int, samples_per_element: int | None = None) -> np.ndarray:
+    """Positions [m] where mode ``column`` (0-based) changes sign, from its Hermite interpolant
+    sampled ``samples_per_element`` times per element (default 50, fewer on fine meshes so
+    that at most ~200,000 points are evaluated)."""
+    n_el = modes.hull.n_elements
+    if samples_per_element is None:
+        samples_per_element = int(np.clip(200_000 // n_el, 2, 50))
+    x = np.linspace(0.0, modes.hull.length, n_el * samples_per_element + 1)
+    w = modes.shape_at(x, columns=column)[:, 0]
     s = np.sign(w)
     k = np.nonzero(s[:-1] * s[1:] < 0)[0]
     return x[k] - w[k] * (x[k + 1] - x[k]) / (w[k + 1] - w[k])

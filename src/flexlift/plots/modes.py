@@ -1,0 +1,94 @@
+"""Figures of the modal analysis: mode shapes, frequency against mode number, convergence.
+
+Each function takes computed data and returns a matplotlib figure (nothing is shown);
+save it with :func:`flexlift.plots._style.save`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexlift.convergence import Convergence, is_uniform
+from flexlift.modes import Modes, analytic_free_free_hz, mode_nodes
+from flexlift.plots._style import new_figure
+
+_SAMPLES_PER_ELEMENT = 40
+_MAX_SAMPLES = 4001
+
+
+def plot_mode_shapes(modes: Modes, n_flex: int = 5):
+    """Unit-peak displacement of the first ``n_flex`` flexible modes along the hull, with the
+    beam nodes nearest each mode's zero crossings ("nodes of the mode") marked."""
+    hull = modes.hull
+    n_flex = max(0, min(n_flex, modes.n_modes - modes.n_rigid))
+    n_x = min(hull.n_elements * _SAMPLES_PER_ELEMENT + 1, _MAX_SAMPLES)
+    x = np.linspace(0.0, hull.length, n_x)
+    fig, axes = new_figure(n_flex, 1, sharex=True, figsize=(8.0, 1.5 + 1.25 * n_flex))
+    axes = np.atleast_1d(axes)
+    xn = hull.x_nodes
+    f = modes.frequencies_hz
+    for k, ax in enumerate(axes, start=1):
+        col = modes.flexible_index(k)
+        w = modes.shape_at(x)[:, col]
+        peak = w[np.argmax(np.abs(w))]
+        w = w / peak
+        ax.axhline(0.0, color="0.6", lw=0.8)
+        ax.plot(x, w, lw=1.6, color=f"C{k - 1}")
+        nodes = mode_nodes(modes, col)
+        wn = modes.shape_at(xn[nodes])[:, col] / peak
+        ax.plot(xn[nodes], wn, "o", ms=6, mfc="white", mec="k",
+                label="nodes of the mode (1-based): " + ", ".join(str(n + 1) for n in nodes))
+        if hull.n_elements <= 60:
+            ax.plot(xn, np.zeros_like(xn), "|", color="0.3", ms=6)
+        ax.set_ylim(-1.25, 1.25)
+        ax.set_ylabel(f"mode {col + 1}\n{f[col]:.3g} Hz")
+        ax.legend(loc="upper right", fontsize=7.5)
+    axes[0].set_title(
+        f"First {n_flex} flexible modes of the free-free hull (unit peak, "
+        f"{hull.n_elements} elements; x = 0 aft)"
+    )
+    axes[-1].set_xlabel("x from the aft end [m]")
+    return fig
+
+
+def plot_frequencies(modes: Modes):
+    """Natural frequency against mode number (flexible modes), with the analytic uniform-beam
+    values where the hull is uniform."""
+    fig, ax = new_figure()
+    n = np.arange(1, modes.n_modes + 1)
+    flex = n > modes.n_rigid
+    f = modes.frequencies_hz
+    ax.plot(n[flex], f[flex], "o-", ms=4, label=f"FE, {modes.hull.n_elements} elements")
+    ax.plot(n[~flex], f[~flex], "s", ms=5, color="0.4", label="rigid modes (heave, pitch)")
+    if is_uniform(modes.hull):
+        k = min(5, int(flex.sum()))
+        fa = analytic_free_free_hz(modes.hull, k)
+        ax.plot(np.arange(3, 3 + k), fa, "x", ms=8, mew=2, color="C3",
+                label="analytic (uniform free-free beam)")
+    ax.set_xlabel("mode number (1, 2 rigid)")
+    ax.set_ylabel("natural frequency [Hz]")
+    if f[flex].size and f[flex].max() / f[flex].min() > 50:
+        ax.set_yscale("log")
+    ax.set_title("Natural frequencies of the free-free hull (dry)")
+    ax.legend()
+    return fig
+
+
+def plot_convergence(conv: Convergence):
+    """Relative frequency error against element count (log-log), with an h^4 guide."""
+    fig, ax = new_figure()
+    err = np.abs(conv.rel_error)
+    n = conv.elements.astype(float)
+    for j in range(err.shape[1]):
+        ok = np.isfinite(err[:, j]) & (err[:, j] > 0)
+        ax.loglog(n[ok], err[ok, j], "o-", ms=4,
+                  label=f"flexible mode {j + 1} (slope {conv.rates[j]:.2f})")
+    ok = np.isfinite(err[:, 0]) & (err[:, 0] > 0)
+    if ok.any():
+        n0, e0 = n[ok][0], err[ok, 0][0]
+        ax.loglog(n, e0 * (n / n0) ** -4, "k--", lw=1, label="slope -4 (h^4)")
+    ax.set_xlabel("number of elements")
+    ax.set_ylabel(f"|f / f_ref - 1|   (reference: {conv.reference})")
+    ax.set_title("Convergence of the flexible frequencies (Hermite cubic elements)")
+    ax.legend(fontsize=7.5)
+    return fig
