@@ -7,9 +7,10 @@ save it with :func:`flexlift.plots._style.save`.
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 
 from flexlift.convergence import Convergence, is_uniform
-from flexlift.modes import Modes, analytic_free_free_hz, mode_nodes
+from flexlift.modes import Modes, analytic_free_free_hz, mode_nodes, zero_crossings
 from flexlift.plots._style import new_figure
 
 _SAMPLES_PER_ELEMENT = 40
@@ -29,21 +30,24 @@ def plot_mode_shapes(modes: Modes, n_flex: int = 5):
     f = modes.frequencies_hz
     for k, ax in enumerate(axes, start=1):
         col = modes.flexible_index(k)
-        w = modes.shape_at(x)[:, col]
+        w = modes.shape_at(x, columns=col)[:, 0]
         peak = w[np.argmax(np.abs(w))]
         w = w / peak
         ax.axhline(0.0, color="0.6", lw=0.8)
         ax.plot(x, w, lw=1.6, color=f"C{k - 1}")
+        xz = zero_crossings(modes, col)
+        ax.plot(xz, np.zeros_like(xz), "x", color="k", ms=5, label="zero crossing")
         nodes = mode_nodes(modes, col)
-        wn = modes.shape_at(xn[nodes])[:, col] / peak
-        ax.plot(xn[nodes], wn, "o", ms=6, mfc="white", mec="k",
-                label="nodes of the mode (1-based): " + ", ".join(str(n + 1) for n in nodes))
+        wn = modes.shape_at(xn[nodes], columns=col)[:, 0] / peak
+        ax.plot(xn[nodes], wn, "o", ms=6, mfc="white", mec="k", label="nearest beam node")
         if hull.n_elements <= 60:
             ax.plot(xn, np.zeros_like(xn), "|", color="0.3", ms=6)
         ax.set_ylim(-1.25, 1.25)
         ax.set_ylabel(f"mode {col + 1}\n{f[col]:.3g} Hz")
-        ax.legend(loc="upper right", fontsize=7.5)
-    axes[0].set_title(
+        shown = ", ".join(str(n + 1) for n in nodes[:12]) + (" ..." if len(nodes) > 12 else "")
+        ax.set_title(f"nodes of mode {col + 1} (1-based): {shown}", loc="right", fontsize=8)
+    axes[0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=2, fontsize=7.5)
+    fig.suptitle(
         f"First {n_flex} flexible modes of the free-free hull (unit peak, "
         f"{hull.n_elements} elements; x = 0 aft)"
     )
@@ -68,7 +72,9 @@ def plot_frequencies(modes: Modes):
     ax.set_xlabel("mode number (1, 2 rigid)")
     ax.set_ylabel("natural frequency [Hz]")
     if f[flex].size and f[flex].max() / f[flex].min() > 50:
-        ax.set_yscale("log")
+        ax.set_yscale("log")  # the rigid modes (0 Hz) cannot show: say so
+        ax.text(0.98, 0.04, "modes 1-2: rigid (heave, pitch), 0 Hz", fontsize=8,
+                ha="right", color="0.3", transform=ax.transAxes)
     ax.set_title("Natural frequencies of the free-free hull (dry)")
     ax.legend()
     return fig
@@ -87,6 +93,9 @@ def plot_convergence(conv: Convergence):
     if ok.any():
         n0, e0 = n[ok][0], err[ok, 0][0]
         ax.loglog(n, e0 * (n / n0) ** -4, "k--", lw=1, label="slope -4 (h^4)")
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xticks(n)
     ax.set_xlabel("number of elements")
     ax.set_ylabel(f"|f / f_ref - 1|   (reference: {conv.reference})")
     ax.set_title("Convergence of the flexible frequencies (Hermite cubic elements)")
