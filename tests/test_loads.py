@@ -14,6 +14,7 @@ from flexlift.loads import (
     LineLoad,
     LoadCase,
     PointLoad,
+    bag_load_matrix,
     lift_load_case,
     line_load_on_grid,
     line_load_vector,
@@ -318,3 +319,15 @@ def test_tanker_strength_against_hand_statics(tanker_plan, tanker_hull):
         np.interp(L - xs, st.x, st.M) - excess * (L - xs) / 2,
         atol=1e-6 * abs(st.max_moment.value),
     )
+
+
+def test_bag_load_matrix(tanker_plan, tanker_hull):
+    B = bag_load_matrix(tanker_plan, tanker_hull)
+    assert B.shape == (24, 7)
+    for k, b in enumerate(tanker_plan.bags):
+        R, Mx = resultant_of(tanker_hull, B[:, k])
+        assert R == pytest.approx(1.0, rel=1e-12)
+        assert Mx == pytest.approx(b.x, rel=1e-12)  # span centre for an internal bag
+    lifts = np.array([b.lift for b in tanker_plan.bags])
+    case = lift_load_case(tanker_plan, tanker_hull, weight_factor=0.0)
+    np.testing.assert_allclose(B @ lifts, nodal_loads(tanker_hull, case), atol=1e-6)

@@ -207,7 +207,24 @@ def resultant_of(hull: Hull, f: np.ndarray) -> tuple[float, float]:
     """Resultant force [N] and its moment about the aft end (sum of force times x) [N m]
     of a nodal load vector ``f`` (the virtual work on heave and on w = x, theta = 1)."""
     f = np.asarray(f, dtype=float)
-    return float(f[..., 0::2].sum(-1)), float(f[..., 0::2] @ hull.x_nodes + f[..., 1::2].sum(-1))
+    return float(f[0::2].sum()), float(f[0::2] @ hull.x_nodes + f[1::2].sum())
+
+
+def bag_load_matrix(plan, hull: Hull) -> np.ndarray:
+    """Consistent nodal loads of each bag per newton of its lift, one column per bag in
+    ``plan.bags`` order: external bags as point forces, internal bags as uniform loads over
+    their spans. ``B @ lifts`` [N] gives the nodal force/moment vector of the bags.
+
+    returns : ndarray (2 (n + 1), n_bags) [N/N, N m/N]
+    """
+    cols = []
+    for b in plan.bags:
+        if b.kind == "external":
+            cols.append(point_load_vector(hull, b.x, 1.0))
+        else:
+            x0, x1 = b.span
+            cols.append(line_load_vector(hull, x0, x1, 1.0 / (x1 - x0)))
+    return np.column_stack(cols) if cols else np.zeros((2 * hull.n_nodes, 0))
 
 
 # ----------------------------------------------------------------------------- the lift case
