@@ -114,7 +114,7 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
     """The whole report as one HTML page (figures embedded as base64 PNG)."""
     generated = generated or datetime.now(timezone.utc)
     criteria = {f"{s.name}: {k}": v for s in stages for k, v in s.criteria.items()}
-    warnings = [w for s in stages for w in s.warnings]
+    warnings = [(s.name, w) for s in stages for w in s.warnings]
     ok = all(criteria.values()) and not warnings
     if not criteria:
         verdict = '<div class="verdict bad">No acceptance criteria were evaluated (the ascent was not simulated).</div>'
@@ -144,14 +144,16 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
     if criteria:
         parts += ['<h2 id="criteria">Acceptance criteria</h2>', _criteria(criteria)]
     if warnings:
-        parts += ['<h2 id="warnings">Warnings</h2>'] + [f'<div class="warn">{_e(w)}</div>' for w in warnings]
+        parts += ['<h2 id="warnings">Warnings</h2>'] + [
+            f'<div class="warn"><b>{_e(name)}:</b> {_e(w)}</div>' for name, w in warnings
+        ]
     for s in stages:
         parts.append(f'<h2 id="{_e(s.name)}">{_e(STAGE_TITLES.get(s.name, s.name))}</h2>')
         lead = s.summary.get("conclusion") if isinstance(s.summary, dict) else None
         if lead:
             parts.append(f"<p>{_e(lead)}</p>")
-        for w in s.warnings:
-            parts.append(f'<div class="warn">{_e(w)}</div>')
+        if s.warnings:
+            parts.append(f'<p class="meta">{len(s.warnings)} warning(s): see <a href="#warnings">Warnings</a>.</p>')
         parts += [_table(t) for t in s.tables]
         parts += [_figure(f) for f in s.figures]
     parts.append("</body></html>")
