@@ -1,0 +1,308 @@
+"""The coupled plant of the ascent: a wet flexible hull, its bags' gas and the seabed (SPEC §5-8).
+
+Hull motion w(x, t) = sum_j psi_j(x) q_j(t) over the wet modes (mass-normalised with the
+structural plus added mass): rigid heave and pitch and ``retained_flexible_modes`` flexible
+modes integrated in time; the higher modes enter the reported displacements as their static
+(mdc) correction, sum over eliminated modes of psi_j(x) Q_j / omega_j^2.
+
+State vector ``x = [q (nr), q' (nr), n (nb), H]``: modal coordinates [m sqrt(kg)], their rates,
+the bags' gas [mol] and the suction holding force [N]. Inputs ``u = [Q_in (nb), u_v (nb)]``:
+fill flows at local pressure [m^3/s] and purge valve openings [-]. The one dynamics function
+is :func:`dynamics` ``f(t, x, u, params) -> (dx/dt, aux)``.
+
+Distributed loads are integrated over the hull with 4-point Gauss-Legendre per element
+("strips"); the bags act at their points (external) or as uniform loads over their spans
+(internal; their gas pressure is taken at the span centre).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.bags import GasModel, gas_model_from_scenario
+from flexlift.beam import assemble
+from flexlift.hull import Hull, hull_from_scenario
+from flexlift.hydro import added_mass_per_length, sphere_diameter, sphere_frontal_area
+from flexlift.liftplan import LiftPlan, plan_lift
+from flexlift.modes import Modes, compute_modes
+from flexlift.seabed import SeabedModel, seabed_from_scenario
+
+_GP, _GW = np.polynomial.legendre.leggauss(4)
+_GP, _GW = 0.5 * (_GP + 1.0), 0.5 * _GW
+
+
+def slope_at(modes: Modes, x) -> np.ndarray:
+    """Mode rotations dw/dx interpolated with the Hermite shape functions at x [m],
+    shape (len(x), m) [rad per unit modal coordinate]."""
+    x = np.atleast_1d(np.asarray(x, dtype=float))
+    hull = modes.hull
+    l = hull.element_length
+    e = np.clip((x / l).astype(int), 0, hull.n_elements - 1)
+    xi = x / l - e
+    dN = np.stack(
+        [(-6 * xi + 6 * xi**2) / l, 1 - 4 * xi + 3 * xi**2, (6 * xi - 6 * xi**2) / l, -2 * xi + 3 * xi**2],
+        axis=-1,
+    )
+    dofs = 2 * e[:, None] + np.arange(4)[None, :]
+    return np.einsum("pk,pkm->pm", dN, modes.phi[dofs])
+
+
+@dataclass(frozen=True)
+class Plant:
+    """Everything the ascent dynamics needs, precomputed (SI).
+
+    names, external : bag names and whether each is an external (parachute) bag
+    x_point : bag points (external: attachment; internal: span centre) [m]
+    capacity, lift : bag capacity [m^3] and rated lift [N]
+    top_offset : height of a bag's top above the hull bottom at its point [m]
+    nr : number of modes integrated in time (2 rigid + retained flexible)
+    """
+
+    hull: Hull
+    modes: Modes  # wet modes, all of them
+    plan: LiftPlan
+    gas: GasModel
+    seabed: SeabedModel
+    names: tuple[str, ...]
+    external: np.ndarray
+    x_point: np.ndarray
+    spans: tuple
+    capacity: np.ndarray
+    lift: np.ndarray
+    top_offset: np.ndarray
+    wet_weight: float
+    nr: int
+    xs: np.ndarray  # strip points [m]
+    ws: np.ndarray  # strip weights [m]
+    psi_s: np.ndarray  # (ns, nm) mode displacement at strips
+    psi_b: np.ndarray  # (nb, nm) generalised force per unit bag force
+    psi_p: np.ndarray  # (nb, nm) displacement at bag points
+    dpsi_p: np.ndarray  # (nb, nm) slope at bag points
+    omega2: np.ndarray  # (nm,)
+    damp: np.ndarray  # (nm,) 2 zeta omega
+    q_weight_s: np.ndarray  # (ns,) wet weight line load [N/m] (negative)
+    Q_weight: np.ndarray  # (nm,) generalised wet weight incl. point masses
+    hold_s: np.ndarray  # (ns,) holding shape at strips [1/m]
+    mass_line: float  # added mass + entrained per length [kg/m]
+    drag_line: float  # 1/2 rho C_D B [kg/m^2]
+    drag_bag: np.ndarray  # (nb,) 1/2 rho C_D,bag A [kg/m]
+    zeta: float
+    pitch_slope: float  # rotation of the rigid pitch mode per unit coordinate [rad]
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def nb(self) -> int:
+        return len(self.names)
+
+    @property
+    def n_state(self) -> int:
+        return 2 * self.nr + self.nb + 1
+
+    def neutral_volumes(self) -> np.ndarray:
+        """Initial gas volumes (SPEC §5): internal bags full, external bags sharing the rest of
+        W' equally so the hull rests neutral [m^3]."""
+        V = np.where(self.external, 0.0, self.capacity)
+        rest = self.wet_weight / (self.gas.rho * self.gas.g) - V.sum()
+        n_ext = int(self.external.sum())
+        if n_ext:
+            V = np.where(self.external, rest / n_ext, V)
+        return V
+
+    def initial_state(self) -> np.ndarray:
+        x = np.zeros(self.n_state)
+        p = self.gas.pressure(np.zeros(self.nb))
+        x[2 * self.nr : 2 * self.nr + self.nb] = self.gas.moles(self.neutral_volumes(), p)
+        x[-1] = self.seabed.H0
+        return x
+
+
+def build_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = None) -> Plant:
+    """Precompute the plant of ``scenario`` (wet modes, strips, bag maps, weights)."""
+    env, hy = scenario.environment, scenario.hydro
+    hull = hull or hull_from_scenario(scenario)
+    if plan is None:
+        plan = plan_lift(scenario, hull, compute_modes(hull))
+    rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
+    a33 = added_mass_per_length(hull.breadth, rho, hy.added_mass_coefficient)
+    extra_m = a33 + hy.entrained_water_t * C.TONNE / hull.length
+    modes = compute_modes(assemble(hull, extra_mass_per_length=extra_m))
+    nr = min(2 + scenario.simulation.retained_flexible_modes, modes.n_modes)
+    l = hull.element_length
+    e = np.arange(hull.n_elements)
+    xs = ((e[:, None] + _GP[None, :]) * l).ravel()
+    ws = np.tile(_GW * l, hull.n_elements)
+    psi_s = modes.shape_at(xs)
+    bags = plan.bags
+    external = np.array([b.kind == "external" for b in bags])
+    x_point = np.array([b.x for b in bags], dtype=float)
+    psi_p = modes.shape_at(x_point)
+    dpsi_p = slope_at(modes, x_point)
+    psi_b = psi_p.copy()
+    for i, b in enumerate(bags):
+        if b.span is not None:
+            a, bb = b.span
+            xm = a + (np.arange(400) + 0.5) * (bb - a) / 400
+            psi_b[i] = modes.shape_at(xm).mean(axis=0)
+    capacity = np.array([b.capacity for b in bags])
+    lift = np.array([b.lift for b in bags])
+    buoy = 1.0 - rho / env.steel_density_kg_m3
+    m_el = hull.mass_per_length[np.clip((xs / l).astype(int), 0, hull.n_elements - 1)]
+    q_weight_s = -m_el * g * buoy
+    Q_weight = psi_s.T @ (ws * q_weight_s)
+    Q_weight = Q_weight - (modes.displacement.T @ hull.point_masses) * g * buoy
+    seabed = seabed_from_scenario(scenario, plan.wet_weight)
+    omega2 = modes.omega**2
+    zeta = scenario.hull.modal_damping
+    damp = 2 * zeta * modes.omega
+    d_bag = sphere_diameter(capacity)
+    top = hull.depth + np.where(external, d_bag, 0.0)
+    pitch_slope = float(slope_at(modes, [0.5 * hull.length])[0, 1])
+    return Plant(
+        hull=hull,
+        modes=modes,
+        plan=plan,
+        gas=gas_model_from_scenario(scenario),
+        seabed=seabed,
+        names=tuple(b.name for b in bags),
+        external=external,
+        x_point=x_point,
+        spans=tuple(b.span for b in bags),
+        capacity=capacity,
+        lift=lift,
+        top_offset=top,
+        wet_weight=plan.wet_weight,
+        nr=nr,
+        xs=xs,
+        ws=ws,
+        psi_s=psi_s,
+        psi_b=psi_b,
+        psi_p=psi_p,
+        dpsi_p=dpsi_p,
+        omega2=omega2,
+        damp=damp,
+        q_weight_s=q_weight_s,
+        Q_weight=Q_weight,
+        hold_s=seabed.shape(xs, hull.length),
+        mass_line=extra_m,
+        drag_line=0.5 * rho * hy.drag_coefficient * hull.breadth,
+        drag_bag=np.where(
+            external, 0.5 * rho * hy.bag_drag_coefficient * sphere_frontal_area(capacity), 0.0
+        ),
+        zeta=zeta,
+        pitch_slope=pitch_slope,
+    )
+
+
+@dataclass
+class Switches:
+    """The plant's discrete state and fault effects (mutable, owned by the simulation loop).
+
+    separated : the hull has separated from the seabed (suction releasing)
+    attached : (nb,) 1 while a bag's sling holds, 0 after it breaks
+    supply : (nb,) 1 while a bag's gas supply works
+    leak : (nb,) gas escape rate of ruptured bags [1/s]
+    current : vertical current, positive up [m/s]
+    noise_s : (ns,) random line load at the strips [N/m]
+    """
+
+    nb: int
+    ns: int
+    separated: bool = False
+    current: float = 0.0
+    attached: np.ndarray = None  # type: ignore[assignment]
+    supply: np.ndarray = None  # type: ignore[assignment]
+    leak: np.ndarray = None  # type: ignore[assignment]
+    noise_s: np.ndarray = None  # type: ignore[assignment]
+
+    def __post_init__(self):
+        self.attached = np.ones(self.nb)
+        self.supply = np.ones(self.nb)
+        self.leak = np.zeros(self.nb)
+        self.noise_s = np.zeros(self.ns)
+
+
+@dataclass
+class Aux:
+    """Quantities computed with the rates that the loop records."""
+
+    z: np.ndarray  # bag point heights (retained modes) [m]
+    zdot: np.ndarray  # bag point velocities [m/s]
+    volume: np.ndarray  # gas volumes [m^3]
+    pressure: np.ndarray  # ambient pressure at bag points [Pa]
+    bag_force: np.ndarray  # buoyancy force on the hull [N]
+    fill: np.ndarray  # fill flow [m^3/s]
+    purge: np.ndarray  # purge flow [m^3/s]
+    uplift: float  # U = sum lift - W' [N]
+    contact: np.ndarray  # (ns,) contact line load [N/m]
+    active: np.ndarray  # (ns,) bool contact active
+    w_s: np.ndarray  # (ns,) strip displacement [m]
+    accel: np.ndarray  # (nr,) modal accelerations
+    line: np.ndarray  # (ns,) line load at the strips except weight [N/m]
+    point: np.ndarray  # (nb,) forces at the bags' points incl. bag drag [N]
+
+
+def dynamics(t: float, x: np.ndarray, u: np.ndarray, params: tuple[Plant, Switches]):
+    """f(t, x, u, params) -> (dx/dt, Aux) of the coupled plant."""
+    P, sw = params
+    nr, nb = P.nr, P.nb
+    q, v = x[:nr], x[nr : 2 * nr]
+    n, H = x[2 * nr : 2 * nr + nb], x[-1]
+    ps, pp = P.psi_s[:, :nr], P.psi_p[:, :nr]
+    w_s, v_s = ps @ q, ps @ v
+    z, zd = pp @ q, pp @ v
+    g = P.gas
+    p = g.p_atm + g.rho * g.g * np.maximum(g.water_depth - z, 0.0)
+    V = np.minimum(n * g.RT / p, P.capacity)
+    F_bag = g.rho * g.g * V * sw.attached
+    vr = v_s - sw.current
+    line = -P.drag_line * np.abs(vr) * vr + sw.noise_s
+    sb = P.seabed
+    qc = -sb.stiffness * w_s - sb.damping * v_s
+    if sw.separated:
+        active = (w_s < 0.0) & (qc > 0.0)
+        qc = np.where(active, qc, 0.0)
+        line = line + qc - H * P.hold_s
+    else:
+        active = np.ones(w_s.shape, dtype=bool)
+        line = line + qc
+    vb = zd - sw.current
+    F_pt = F_bag - P.drag_bag * np.abs(vb) * vb * sw.attached
+    Q = P.psi_s[:, :nr].T @ (P.ws * line) + P.psi_b[:, :nr].T @ F_pt + P.Q_weight[:nr]
+    acc = Q - P.omega2[:nr] * q - P.damp[:nr] * v
+    fill = u[:nb] * sw.supply
+    purge = g.purge_max * np.clip(u[nb:], 0.0, 1.0) * np.sqrt(V / P.capacity)
+    ndot = p * (fill - purge) / g.RT - sw.leak * n
+    U = float(F_bag.sum()) - P.wet_weight
+    if sw.separated:
+        Hdot = -H / sb.release_time
+    else:
+        Hdot = -(sb.H0 / sb.breakout_time) * min(U / sb.H0, 1.0) if U > 0 else 0.0
+    dx = np.concatenate([v, acc, ndot, [Hdot]])
+    return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, line, F_pt)
+
+
+def observe(P: Plant, x: np.ndarray):
+    """Bag-point heights [m], velocities [m/s] and gas volumes [m^3] of state ``x``."""
+    nr, nb = P.nr, P.nb
+    pp = P.psi_p[:, :nr]
+    z = pp @ x[:nr]
+    p = P.gas.pressure(z)
+    V = np.minimum(x[2 * nr : 2 * nr + nb] * P.gas.RT / p, P.capacity)
+    return z, pp @ x[nr : 2 * nr], V
+
+
+def step_matrix(P: Plant, dt: float, active: np.ndarray | None) -> np.ndarray:
+    """(I - dt/2 J)^-1 for the mechanical states, J the Jacobian of modal stiffness, damping
+    and the contact springs active at the strips ``active`` (None: none) [-]."""
+    nr = P.nr
+    K = np.diag(P.omega2[:nr])
+    Cm = np.diag(P.damp[:nr])
+    if active is not None and np.any(active):
+        ps = P.psi_s[:, :nr] * (P.ws * active)[:, None]
+        K = K + P.seabed.stiffness * ps.T @ P.psi_s[:, :nr]
+        Cm = Cm + P.seabed.damping * ps.T @ P.psi_s[:, :nr]
+    J = np.block([[np.zeros((nr, nr)), np.eye(nr)], [-K, -Cm]])
+    return np.linalg.inv(np.eye(2 * nr) - 0.5 * dt * J)

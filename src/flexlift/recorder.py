@@ -1,0 +1,146 @@
+"""Recording an ascent while it runs: sampled time histories, running maxima, events, gas
+accounting and the strength snapshots (used by :mod:`flexlift.simulate`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexlift.results import Result, build_result
+
+
+class Recorder:
+    """Collects what the loop produces; :meth:`finish` turns it into a :class:`Result`."""
+
+    def __init__(self, P, scenario, mode: str, dt: float):
+        sim = scenario.simulation
+        self.P, self.scenario, self.mode, self.dt = P, scenario, mode, dt
+        self.k_out = max(1, int(round(sim.output_interval_s / dt)))
+        self.k_str = max(1, int(round(sim.strength_interval_s / dt)))
+        self.rows: dict[str, list] = {}
+        self.snap: list[dict] = []
+        self.events: list[dict] = []
+        self.kinds: set[str] = set()
+        nb = P.nb
+        self.arrival = np.full(nb, np.nan)
+        self.gas_local = np.zeros(nb)
+        self.gas_free = np.zeros(nb)
+        self.vented = np.zeros(nb)
+        self.vmax = 0.0
+        self.pmax = 0.0
+        self.last = None
+        self.limits = scenario.limits
+        self.liftoff = False
+
+    # ------------------------------------------------------------------ events
+    def event(self, t: float, kind: str, bag: str | None, detail: str = "") -> None:
+        self.events.append({"time_s": round(float(t), 3), "kind": kind, "bag": bag, "detail": detail})
+        self.kinds.add(kind)
+
+    def has(self, kind: str) -> bool:
+        return kind in self.kinds
+
+    def arrivals(self, t: float, within: np.ndarray) -> None:
+        new = within & np.isnan(self.arrival)
+        if new.any():
+            for i in np.flatnonzero(new):
+                self.arrival[i] = t
+                self.event(t, "arrival", self.P.names[i])
+
+    def vent(self, volume_local: np.ndarray) -> None:
+        self.vented += volume_local
+
+    # ------------------------------------------------------------------ samples
+    def sample(self, k, t, x, aux, u, cmd, ext, sw) -> None:
+        P = self.P
+        nr = P.nr
+        dt = self.dt
+        self.gas_local += aux.fill * dt
+        self.gas_free += aux.fill * aux.pressure / P.gas.p_atm * dt
+        att = sw.attached > 0
+        v = float(np.max(np.abs(aux.zdot[att]))) if att.any() else 0.0
+        pitch = abs(float(x[1]) * P.pitch_slope)
+        if v > self.vmax:
+            self.vmax = v
+            if v > self.limits.ascent_velocity_m_s and not self.has("limit_ascent_velocity"):
+                i = int(np.argmax(np.abs(aux.zdot) * att))
+                self.event(t, "limit_ascent_velocity", P.names[i], f"{v:.2f} m/s")
+        if pitch > self.pmax:
+            self.pmax = pitch
+            if np.degrees(pitch) > self.limits.pitch_deg and not self.has("limit_pitch"):
+                self.event(t, "limit_pitch", None, f"{np.degrees(pitch):.1f} deg")
+        if sw.separated:
+            wmin = float(aux.w_s.min())
+            if not self.liftoff and wmin > 0.05:
+                self.liftoff = True
+                self.event(t, "liftoff", None, "the whole hull is clear of the seabed")
+            elif self.liftoff and wmin < 0.0 and not self.has("resettle"):
+                self.event(t, "resettle", None, "the hull touched the seabed again")
+        self.last = (t, x.copy(), aux, u.copy(), cmd, ext, sw.separated, sw.attached.copy())
+        if k % self.k_out == 0:
+            self._store()
+        if k % self.k_str == 0:
+            self._snapshot(t, x, aux, sw)
+
+    def _store(self) -> None:
+        t, x, aux, u, cmd, ext, separated, attached = self.last
+        P = self.P
+        nb, nr = P.nb, P.nr
+        # static (mdc) correction of the eliminated modes at the bag points
+        Q = P.psi_s.T @ (P.ws * aux.line) + P.psi_b.T @ aux.point + P.Q_weight
+        qs = np.zeros(P.modes.n_modes)
+        qs[:nr] = x[:nr]
+        qs[nr:] = Q[nr:] / P.omega2[nr:]
+        z = P.psi_p @ qs
+        theta = P.dpsi_p @ qs
+        theta_rate = P.dpsi_p[:, :nr] @ x[nr : 2 * nr]
+        full = np.full(nb, np.nan)
+
+        def on_ext(vals):
+            out = full.copy()
+            out[ext] = vals
+            return out
+
+        row = {
+            "time": t,
+            "height": z,
+            "ascent_velocity": aux.zdot,
+            "pitch_angle": theta,
+            "pitch_rate": theta_rate,
+            "net_flow": aux.fill - aux.purge,
+            "gas_volume": aux.volume,
+            "lift": aux.bag_force,
+            "fill_rate": aux.fill,
+            "purge_opening": np.where(P.external, u[nb:], np.nan),
+            "supervisor_output": on_ext(cmd[2]),
+            "desired_volume": on_ext(cmd[3]),
+            "heave": float(P.psi_s[0, 0] * x[0]),
+            "pitch": float(x[1] * P.pitch_slope),
+            "holding_force": float(x[-1]),
+            "uplift": aux.uplift,
+            "contact_force": float(P.ws @ aux.contact),
+        }
+        for key, val in row.items():
+            self.rows.setdefault(key, []).append(val)
+
+    def _snapshot(self, t, x, aux, sw) -> None:
+        nr = self.P.nr
+        self.snap.append(
+            {
+                "t": t,
+                "q": x[:nr].copy(),
+                "v": x[nr : 2 * nr].copy(),
+                "a": aux.accel.copy(),
+                "H": float(x[-1]),
+                "separated": sw.separated,
+                "point": aux.point.copy(),
+                "volume": aux.volume.copy(),
+                "attached": sw.attached.copy(),
+                "current": sw.current,
+                "noise": sw.noise_s.copy(),
+            }
+        )
+
+    def finish(self, error: str | None) -> Result:
+        if self.last is not None and (not self.rows or self.rows["time"][-1] != self.last[0]):
+            self._store()
+        return build_result(self, error)

@@ -1,0 +1,231 @@
+"""The time-domain ascent: the loop, its events and faults (SPEC §8).
+
+:func:`simulate` integrates the coupled plant of :mod:`flexlift.plant` with a fixed step
+``simulation.time_step_s`` and the controllers of :mod:`flexlift.control` sampled at
+``control.sample_rate_Hz`` (zero-order hold). The ``paper`` mode runs the uncoupled per-bag
+plant of :mod:`flexlift.paper` through the same loop.
+
+Integrator: the mechanical states use the linearly implicit trapezoidal rule,
+x+ = x + (I - dt/2 J)^-1 dt f(x), with J the exact Jacobian of the modal stiffness, modal
+damping and the active seabed springs. It is A-stable, so the stiff parts (the contact
+penalty, omega ~ 6 rad/s and damping 13 1/s over the hull; flexible modes up to ~90 rad/s)
+cost nothing at dt = 0.1 s, and second order on them; drag, buoyancy and the gas, breakout
+and disturbance states (time scales of tens of seconds) are advanced explicitly. Spill and
+relief venting are instantaneous projections after each step.
+
+The run stops when every bag point has held within ``limits.arrival_tolerance_m`` of the
+target for ``simulation.hold_time_s``, when a bag breaches the surface (the model ends at the
+surface), at ``simulation.duration_s``, or with :class:`~flexlift.errors.SimulationError` (its
+``partial`` the result so far) when the numerics fail.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.control import Controller, control_params, fuzzy_engines
+from flexlift.errors import InputError, SimulationError
+from flexlift.plant import Switches, build_plant, dynamics, observe, step_matrix
+from flexlift.recorder import Recorder
+from flexlift.results import Result
+
+log = logging.getLogger(__name__)
+
+#: a hull is clear of the seabed once every point is this high [m]
+LIFTOFF_CLEARANCE = 0.05
+
+
+def check_faults(scenario, names) -> None:
+    """InputError for a fault that names an unknown bag."""
+    for k, f in enumerate(scenario.faults):
+        if f.bag not in names:
+            raise InputError(f"faults[{k}].bag", f.bag, f"known bags are {', '.join(names)}")
+
+
+def simulate(scenario, control: str | None = None, duration: float | None = None,
+             engine="table", progress=None, plant=None) -> Result:
+    """Simulate the ascent of ``scenario``.
+
+    control : control mode (default ``scenario.control.mode``)
+    duration : largest simulated time [s] (default ``simulation.duration_s``)
+    engine : fuzzy engine, "table" (default), "exact" or a (supervisor, fill) pair
+    progress : optional callable(fraction) for a progress bar
+    plant : a prebuilt :class:`~flexlift.plant.Plant` (default: built from the scenario)
+    """
+    mode = control or scenario.control.mode
+    if mode not in ("decentralized", "coordinated", "paper", "open-loop"):
+        raise InputError("control", mode, "use decentralized, coordinated, paper or open-loop")
+    sim = scenario.simulation
+    T_end = float(duration if duration is not None else sim.duration_s)
+    if not math.isfinite(T_end) or T_end <= 0:
+        raise InputError("duration", duration, "must be a positive time [s]")
+    if mode == "paper":
+        from flexlift.paper import simulate_paper
+
+        return simulate_paper(scenario, T_end, engine, progress)
+    P = plant or build_plant(scenario)
+    check_faults(scenario, P.names)
+    return _run(scenario, P, mode, T_end, engine, progress)
+
+
+def _run(scenario, P, mode, T_end, engine, progress) -> Result:
+    sim, lim, env = scenario.simulation, scenario.limits, scenario.environment
+    dt = sim.time_step_s
+    n_steps = int(math.ceil(T_end / dt - 1e-9))
+    period = 1.0 / scenario.control.sample_rate_Hz
+    k_ctrl = max(1, int(round(period / dt)))
+    nr, nb = P.nr, P.nb
+    ext = np.flatnonzero(P.external)
+    rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
+    hold_centroid = float(P.ws @ (P.hold_s * P.xs))
+    cp = control_params(scenario, P.x_point[ext], P.neutral_volumes()[ext], P.capacity[ext],
+                        rho, g, hold_centroid, mode)
+    sup, fill = fuzzy_engines(scenario, engine)
+    ctrl = Controller(cp, sup, fill)
+    sw = Switches(nb, P.xs.size)
+    dist = scenario.disturbance
+    sw.current = dist.current_m_s
+    rng = np.random.default_rng(dist.seed)
+    noise_el = np.zeros(P.hull.n_elements)
+    ou_a = math.exp(-dt / dist.noise_time_s)
+    ou_b = dist.force_noise_N_m * math.sqrt(1 - ou_a**2)
+    strips_per_el = P.xs.size // P.hull.n_elements
+    c = scenario.control
+    meas_rng = np.random.default_rng(dist.seed + 1)
+    noisy = c.height_noise_m > 0 or c.velocity_noise_m_s > 0 or c.volume_noise_m3 > 0
+    # sensor faults on the controlled bags
+    drift = np.zeros(nb)
+    drift_t0 = np.zeros(nb)
+    frozen = np.zeros(nb, dtype=bool)
+    frozen_until = np.full(nb, np.inf)
+    faults = sorted(scenario.faults, key=lambda f: f.time_s)
+    fi = 0
+    name_idx = {n: i for i, n in enumerate(P.names)}
+    ctrl_idx = {int(b): k for k, b in enumerate(ext)}
+
+    x = P.initial_state()
+    u = np.zeros(2 * nb)
+    mats = {"held": step_matrix(P, dt, np.ones(P.xs.size, bool)), "free": step_matrix(P, dt, None)}
+    rec = Recorder(P, scenario, mode, dt)
+    last = (np.zeros(nb), np.zeros(nb), np.zeros(nb))
+    cmd = (np.zeros(ext.size), np.zeros(ext.size), np.zeros(ext.size), np.zeros(ext.size))
+    H0 = P.seabed.H0
+    tol, target = lim.arrival_tolerance_m, c.target_height_m
+    hold_since = None
+    clear_depth = lim.surface_clearance_m
+    surf = env.water_depth_m
+    error = None
+    nm_state = 2 * nr
+    report_every = max(1, n_steps // 100)
+    t = 0.0
+    for k in range(n_steps + 1):
+        t = k * dt
+        while fi < len(faults) and faults[fi].time_s <= t + 1e-12:
+            f = faults[fi]
+            i = name_idx[f.bag]
+            detail = ""
+            if f.kind == "bag_rupture":
+                sw.leak[i] = 1.0 / f.leak_time_s
+            elif f.kind == "sling_break":
+                sw.attached[i] = 0.0
+                if i in ctrl_idx:
+                    ctrl.active[ctrl_idx[i]] = False
+            elif f.kind == "supply_failure":
+                sw.supply[i] = 0.0
+            elif f.kind == "sensor_drift":
+                drift[i], drift_t0[i] = f.rate_m_s, t
+            elif f.kind == "sensor_stuck":
+                frozen[i] = True
+            elif f.kind == "sensor_dropout":
+                frozen[i], frozen_until[i] = True, t + f.duration_s
+            if f.kind.startswith("sensor") and i not in ctrl_idx:
+                detail = "no controller on this bag: no effect"
+            rec.event(t, f.kind, f.bag, detail)
+            fi += 1
+        if dist.force_noise_N_m > 0:
+            noise_el = ou_a * noise_el + ou_b * rng.standard_normal(noise_el.size)
+            sw.noise_s = np.repeat(noise_el, strips_per_el)
+        if k % k_ctrl == 0:
+            # measurements (what the controllers see)
+            zt, zdt, Vt = observe(P, x)
+            zm = zt + drift * np.maximum(t - drift_t0, 0.0)
+            zdm, Vm = zdt, Vt
+            if noisy:
+                zm = zm + c.height_noise_m * meas_rng.standard_normal(nb)
+                zdm = zdm + c.velocity_noise_m_s * meas_rng.standard_normal(nb)
+                Vm = Vm + c.volume_noise_m3 * meas_rng.standard_normal(nb)
+            thaw = frozen & (t >= frozen_until)
+            frozen[thaw] = False
+            if frozen.any():
+                zm = np.where(frozen, last[0], zm)
+                zdm = np.where(frozen, last[1], zdm)
+                Vm = np.where(frozen, last[2], Vm)
+            last = (zm, zdm, Vm)
+            cmd = ctrl.step(t, zm[ext], zdm[ext], Vm[ext], sw.separated)
+            u = np.zeros(2 * nb)
+            u[ext] = cmd[0]
+            u[nb + ext] = cmd[1]
+        dx, aux = dynamics(t, x, u, (P, sw))
+        rec.sample(k, t, x, aux, u, cmd, ext, sw)
+        if not np.all(np.isfinite(dx)):
+            error = f"numerics failed at t = {t:.1f} s: non-finite state derivative"
+            break
+        # events on the current state
+        if not sw.separated and aux.uplift > x[-1]:
+            sw.separated = True
+            rec.event(t, "separation", None, f"uplift {aux.uplift / (C.TONNE * g):.0f} t")
+        tops = aux.z + P.top_offset
+        if np.any((surf - tops < clear_depth) & (sw.attached > 0)):
+            i = int(np.argmax(tops * (sw.attached > 0)))
+            rec.event(t, "surface_breach", P.names[i], "the run ends at the surface")
+            break
+        if sw.separated:
+            within = np.abs(aux.z - target) <= tol
+            rec.arrivals(t, within)
+            if np.all(within | (sw.attached == 0)):
+                hold_since = t if hold_since is None else hold_since
+                if t - hold_since >= scenario.simulation.hold_time_s:
+                    rec.event(t, "target_held", None, f"held {scenario.simulation.hold_time_s:.0f} s")
+                    break
+            else:
+                hold_since = None
+        if k == n_steps:
+            break
+        # step
+        if not sw.separated:
+            Minv = mats["held"]
+        elif aux.active.any():
+            Minv = step_matrix(P, dt, aux.active)
+        else:
+            Minv = mats["free"]
+        step = dt * dx
+        step[:nm_state] = Minv @ step[:nm_state]
+        x = x + step
+        # spill and relief at the new depths
+        nsl = slice(nm_state, nm_state + nb)
+        z_new = P.psi_p[:, :nr] @ x[:nr]
+        p_new = P.gas.pressure(z_new)
+        n_max = P.gas.max_moles(p_new, P.capacity, ~P.external)
+        over = x[nsl] > n_max
+        if over.any():
+            rec.vent(np.where(over, (x[nsl] - n_max) * P.gas.RT / p_new, 0.0))
+            x[nsl] = np.minimum(x[nsl], n_max)
+        x[nsl] = np.maximum(x[nsl], 0.0)
+        x[-1] = max(x[-1], 0.0)
+        if sw.separated and not rec.has("breakout") and x[-1] < 1e-3 * H0:
+            rec.event(t + dt, "breakout", None, "holding force below 0.1 % of H0")
+        if progress is not None and k % report_every == 0:
+            progress(k / n_steps)
+        if not np.all(np.isfinite(x)) or np.abs(x[:nm_state]).max() > 1e9:
+            error = f"numerics failed at t = {t + dt:.1f} s: state blew up"
+            break
+    if progress is not None:
+        progress(1.0)
+    result = rec.finish(error)
+    if error:
+        raise SimulationError(error + " (results kept up to that moment)", partial=result)
+    return result
