@@ -63,7 +63,7 @@ def test_run_stage_writes_figures_and_tables(tmp_path, tanker):
     csv = (tmp_path / "tables" / "reduce_comparison.csv").read_text().splitlines()
     assert len(csv) == 1 + len(METHODS)
     assert (tmp_path / "tables" / "reduce_gains.csv").read_text().count("\n") == 25
-    assert "most accurate" in res.tables[0].note
+    assert "ω_lo" in res.tables[0].note and "most accurate" in res.summary["conclusion"]
 
 
 @pytest.mark.parametrize(

@@ -296,7 +296,8 @@ def flexible_dc_gain(sys: ModalStateSpace) -> np.ndarray:
 def mode_gains(sys: ModalStateSpace, omega_lo: float | None = None, output=0, input=0
                ) -> np.ndarray:
     """Per-mode gain (m,) from one input to one output (names or positions):
-    |c_i b_i| / ω_i² (dc gain) for a flexible mode, |G_i(jω_lo)| for a rigid one.
+    |c_i b_i| / ω_i² (dc gain) for a flexible mode, |G_i(jω_lo)| for a rigid one (for a
+    velocity output every flexible dc gain is 0, so rank displacement outputs).
     ``output=None, input=None``: the root-sum-square over all input/output pairs.
     omega_lo : low frequency for the rigid modes [rad/s], default :func:`default_omega_lo`"""
     w_lo = default_omega_lo(sys) if omega_lo is None else float(omega_lo)
@@ -333,7 +334,8 @@ _BLOCK_ELEMENTS = 1 << 20
 def frequency_response(sys: ModalStateSpace, omega) -> np.ndarray:
     """G(jω) for every output, input and frequency, shape (n_out, n_in, n_freq), closed form.
 
-    omega : frequencies [rad/s]; at ω = 0 a rigid mode's term is infinite (returned as inf)
+    omega : frequencies [rad/s]; at ω = 0 a model with rigid modes has no finite response
+        (NaN is returned there)
 
     Vectorised over modes and frequencies (frequencies in blocks to bound memory):
     H = 1 / (ω_i² − ω² + 2jζ_iω_iω) for all (ω, i), then one matrix product with the
