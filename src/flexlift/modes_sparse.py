@@ -49,6 +49,17 @@ _SQRT3 = np.sqrt(3.0)
 _DENSE_BELOW = 64
 
 
+def _inner(A, B):
+    """A^T B for tall, skinny A (N, 2) and B (N, k), without BLAS: these products are memory
+    bound, and a multithreaded BLAS under CPU contention makes them 10x slower."""
+    return np.einsum("ni,nk->ik", A, B)
+
+
+def _outer(A, C):
+    """A @ C for A (N, 2), C (2, k), without BLAS (see :func:`_inner`)."""
+    return np.einsum("ni,ik->nk", A, C)
+
+
 class _Flexibility:
     """The operator A = L^-1 P^T M P L^-T of the module docstring, for blocks of vectors."""
 
@@ -106,7 +117,7 @@ class _Flexibility:
 
     def project(self, y):
         """Remove the rigid part M-orthogonally."""
-        return y - self.R @ (self.MR.T @ y)
+        return y - _outer(self.R, _inner(self.MR, y))
 
     def modes(self, z):
         """Scaled-back mode shapes (original DOFs) of the eigenvectors z."""
@@ -117,7 +128,7 @@ class _Flexibility:
         if z.ndim == 1:
             return self.matmat(z[:, None])[:, 0]
         y = self.integrate(*self._LinvT(z))
-        u = np.asarray(self.M @ y) - self.MR @ (self.MR.T @ y)  # (P^T M P) with the projection
+        u = np.asarray(self.M @ y) - _outer(self.MR, _inner(self.MR, y))  # P^T M P, projected
         return self._Linv(*self.integrate_T(u)) * self.lam_ref
 
 
