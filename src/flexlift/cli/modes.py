@@ -87,7 +87,7 @@ def summary_of(scenario, modes: Modes, conv: Convergence | None, solver: str) ->
         "scenario": scenario.name,
         "elements": hull.n_elements,
         "nodes": hull.n_nodes,
-        "solver": solver,
+        "solver": "sparse" if solver == "auto" else solver,
         "frequencies_hz": [float(f) for f in modes.frequencies_hz],
         "rigid_modes": modes.n_rigid,
         "mode_nodes": _nodes_of(modes),
