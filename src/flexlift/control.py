@@ -42,7 +42,8 @@ DERIV_TAU = 1.0
 
 class SupervisorTable:
     """Bilinear lookup of a two-input fuzzy map sampled on a ``grid`` x ``grid`` lattice over
-    [-1, 1]^2; inputs saturated. ``table(x)`` with x (n, 2) -> (n,)."""
+    [-1, 1]^2; inputs saturated. ``table(x)`` with x (n, 2) -> (n,); ``table.pair(e, r)``
+    takes the two columns separately."""
 
     def __init__(self, fis, grid: int = 201):
         g = np.linspace(-1.0, 1.0, grid)
@@ -50,18 +51,23 @@ class SupervisorTable:
         self.values = np.asarray(fis(np.column_stack([E.ravel(), R.ravel()]))).reshape(grid, grid)
         self.grid = grid
         self.h = 2.0 / (grid - 1)
+        self.flat = self.values.ravel()
 
     def __call__(self, x):
-        x = np.clip(np.asarray(x, dtype=float), -1.0, 1.0)
-        s = (x + 1.0) / self.h
-        i = np.minimum(s.astype(int), self.grid - 2)
-        f = s - i
-        T = self.values
-        a, b = i[:, 0], i[:, 1]
-        fe, fr = f[:, 0], f[:, 1]
-        return (T[a, b] * (1 - fe) + T[a + 1, b] * fe) * (1 - fr) + (
-            T[a, b + 1] * (1 - fe) + T[a + 1, b + 1] * fe
-        ) * fr
+        x = np.asarray(x, dtype=float)
+        return self.pair(x[:, 0], x[:, 1])
+
+    def pair(self, e, r):
+        top = self.grid - 1 - 1e-9
+        se = np.minimum(np.maximum((e + 1.0) / self.h, 0.0), top)
+        sr = np.minimum(np.maximum((r + 1.0) / self.h, 0.0), top)
+        a, b = se.astype(int), sr.astype(int)
+        fe, fr = se - a, sr - b
+        k = a * self.grid + b
+        T = self.flat
+        lo = T[k] + fe * (T[k + self.grid] - T[k])
+        hi = T[k + 1] + fe * (T[k + self.grid + 1] - T[k + 1])
+        return lo + fr * (hi - lo)
 
 
 class FillTable:
@@ -211,18 +217,44 @@ class Controller:
         self.t_sep = None
         self.z0 = np.zeros(n)
         self.active = np.ones(n, dtype=bool)  # False once a bag is lost (sling break)
+        self.zeros = np.zeros(n)
+        self.prof = None
+        self.V_hold = params.V_neutral + params.V_pull
+        self.inv_e, self.inv_r, self.inv_T = 1 / params.e_scale, 1 / params.r_scale, 1 / params.period
+        self.a_filt = params.period / (DERIV_TAU + params.period)
+        self.d_gain = 1.0 / np.sqrt(1.0 + params.lam**2) / params.d_scale
+        self.coordinated = params.mode == "coordinated" and n > 1
+        self._sup = getattr(supervisor, "pair", None) or (
+            lambda e, r: np.asarray(supervisor(np.column_stack([np.clip(e, -1, 1), np.clip(r, -1, 1)])), dtype=float)
+        )
+
+    @property
+    def all_active(self) -> bool:
+        return bool(self.active.all())
 
     def reference(self, t: float):
         """(z_ref, ż_ref) per bag [m, m/s] (zeros before separation)."""
-        p = self.p
         if self.t_sep is None:
-            return np.zeros_like(self.z0), np.zeros_like(self.z0)
-        s, v = trapezoid(t - self.t_sep, p.target - self.z0, p.speed, p.accel)
-        return self.z0 + s, v
+            return self.zeros, self.zeros
+        if self.prof is None:
+            p = self.p
+            D = np.abs(p.target - self.z0)
+            vp = np.minimum(p.speed, np.sqrt(D * p.accel))
+            ta = vp / p.accel
+            tc = np.where(vp > 0, (D - vp * ta) / np.where(vp > 0, vp, 1.0), 0.0)
+            self.prof = (np.sign(p.target - self.z0), D, vp, ta, ta + tc, 2 * ta + tc)
+        sgn, D, vp, ta, tb, T = self.prof
+        a = self.p.accel
+        tau = max(t - self.t_sep, 0.0)
+        r = np.maximum(T - tau, 0.0)
+        pos = np.where(tau < ta, 0.5 * a * tau * tau, np.where(tau < tb, vp * (tau - 0.5 * ta), D - 0.5 * a * r * r))
+        vel = np.minimum(np.minimum(a * tau, vp), a * r)
+        return self.z0 + sgn * pos, sgn * vel
 
     def step(self, t: float, z, zdot, V, separated: bool):
         """One control sample from measured heights [m], velocities [m/s] and gas volumes
-        [m^3]. Returns (fill [m^3/s], purge opening [-], supervisor u [-], V_d [m^3])."""
+        [m^3]. Returns (fill [m^3/s], purge opening [-], supervisor u [-], V_d [m^3],
+        z_ref [m])."""
         p = self.p
         if separated and self.t_sep is None:
             self.t_sep = t
@@ -231,41 +263,40 @@ class Controller:
                 self.z0 = np.full_like(self.z0, float(np.mean(z[live])) if live.any() else 0.0)
             else:
                 self.z0 = np.array(z, dtype=float)
-        u = np.zeros_like(self.z0)
         if p.mode == "open-loop" or self.t_sep is None:
-            V_d = p.V_neutral + p.V_pull
+            V_d = self.V_hold
+            u = self.zeros
+            z_ref = self.zeros
         else:
             z_ref, zd_ref = self.reference(t)
-            x = np.column_stack([(z_ref - z) / p.e_scale, (zd_ref - zdot) / p.r_scale])
-            u = np.asarray(self.supervisor(np.clip(x, -1.0, 1.0)), dtype=float)
+            u = self._sup((z_ref - z) * self.inv_e, (zd_ref - zdot) * self.inv_r)
             V_d = p.V_neutral + u * p.dV_max
-        if p.mode == "coordinated" and p.x.size > 1 and self.active.sum() > 1:
+        if self.coordinated and self.active.sum() > 1:
             live = self.active
             xl = p.x[live] - p.x[live].mean()
             den = float(xl @ xl)
-            theta = float(xl @ (z[live] - z[live].mean())) / den
-            theta_d = float(xl @ (zdot[live] - zdot[live].mean())) / den
+            theta = float(xl @ z[live]) / den
+            theta_d = float(xl @ zdot[live]) / den
             V_d = V_d - (p.k_pitch * theta + p.k_pitch_rate * theta_d) * p.lever
         eps = V_d - V
         if self.prev_eps is None:
-            self.prev_eps = eps.copy()
-        a = p.period / (DERIV_TAU + p.period)
-        self.eps_rate += a * ((eps - self.prev_eps) / p.period - self.eps_rate)
-        self.prev_eps = eps.copy()
-        s = self.eps_rate + p.lam * eps
-        d = s / np.sqrt(1.0 + p.lam**2) / p.d_scale
-        fill = np.where(eps > 0, self.fill(np.clip(d, -1.0, 1.0)), 0.0) * p.fill_max
+            self.prev_eps = eps
+        self.eps_rate = self.eps_rate + self.a_filt * ((eps - self.prev_eps) * self.inv_T - self.eps_rate)
+        self.prev_eps = eps
+        d = (self.eps_rate + p.lam * eps) * self.d_gain
+        fill = self.fill(np.minimum(np.maximum(d, -1.0), 1.0)) * (eps > 0) * p.fill_max
         excess = -eps
         if p.mode == "open-loop":
-            opening = np.zeros_like(eps)
+            opening = self.zeros
         else:
-            deriv = (excess - self.prev_excess) / p.period
-            raw = p.kp * excess + p.ki * self.integ + p.kd * deriv
-            wind = ((raw >= 1.0) & (excess > 0)) | ((raw <= 0.0) & (excess < 0))
-            self.integ = np.where(wind, self.integ, self.integ + excess * p.period)
-            self.integ = np.maximum(self.integ, 0.0)
-            opening = np.where(excess > 0, np.clip(raw, 0.0, 1.0), 0.0)
+            raw = p.kp * excess + p.ki * self.integ
+            if p.kd:
+                raw = raw + p.kd * (excess - self.prev_excess) * self.inv_T
+            hold = ((raw >= 1.0) & (excess > 0)) | ((raw <= 0.0) & (excess < 0))
+            self.integ = np.maximum(self.integ + excess * p.period * ~hold, 0.0)
+            opening = np.minimum(np.maximum(raw, 0.0), 1.0) * (excess > 0)
         self.prev_excess = excess
-        fill = np.where(self.active, fill, 0.0)
-        opening = np.where(self.active, opening, 0.0)
-        return fill, opening, u, V_d
+        if not self.all_active:
+            fill = fill * self.active
+            opening = opening * self.active
+        return fill, opening, u, V_d, z_ref

@@ -216,6 +216,8 @@ class Switches:
     supply: np.ndarray = None  # type: ignore[assignment]
     leak: np.ndarray = None  # type: ignore[assignment]
     noise_s: np.ndarray = None  # type: ignore[assignment]
+    noisy: bool = False
+    full: bool = False  # compute the strip loads even while held (for recording)
 
     def __post_init__(self):
         self.attached = np.ones(self.nb)
@@ -237,51 +239,118 @@ class Aux:
     purge: np.ndarray  # purge flow [m^3/s]
     uplift: float  # U = sum lift - W' [N]
     contact: np.ndarray  # (ns,) contact line load [N/m]
-    active: np.ndarray  # (ns,) bool contact active
+    active: np.ndarray | None  # (ns,) bool contact active (None: held, all)
     w_s: np.ndarray  # (ns,) strip displacement [m]
     accel: np.ndarray  # (nr,) modal accelerations
     line: np.ndarray  # (ns,) line load at the strips except weight [N/m]
     point: np.ndarray  # (nb,) forces at the bags' points incl. bag drag [N]
 
 
-def dynamics(t: float, x: np.ndarray, u: np.ndarray, params: tuple[Plant, Switches]):
-    """f(t, x, u, params) -> (dx/dt, Aux) of the coupled plant."""
-    P, sw = params
-    nr, nb = P.nr, P.nb
+class Fast:
+    """Arrays of a :class:`Plant` sliced to the retained modes, for the inner loop."""
+
+    def __init__(self, P: Plant):
+        nr = P.nr
+        self.nr, self.nb = nr, P.nb
+        self.ps = np.ascontiguousarray(P.psi_s[:, :nr])  # (ns, nr)
+        self.G = np.ascontiguousarray((P.psi_s[:, :nr] * P.ws[:, None]).T)  # (nr, ns)
+        self.pp = np.ascontiguousarray(P.psi_p[:, :nr])  # (nb, nr)
+        self.Gb = np.ascontiguousarray(P.psi_b[:, :nr].T)  # (nr, nb)
+        self.Qw = P.Q_weight[:nr].copy()
+        self.om2 = P.omega2[:nr].copy()
+        self.damp = P.damp[:nr].copy()
+        self.Qhold = self.G @ P.hold_s  # generalised force per unit holding force (down: -)
+        g = P.gas
+        self.RT, self.p_atm, self.rg, self.depth = g.RT, g.p_atm, g.rho * g.g, g.water_depth
+        self.cap = P.capacity
+        self.inv_cap = 1.0 / P.capacity
+        self.purge_max = g.purge_max
+        self.k, self.c = P.seabed.stiffness, P.seabed.damping
+        self.H0, self.Tb, self.tau = P.seabed.H0, P.seabed.breakout_time, P.seabed.release_time
+        self.drag, self.drag_bag = P.drag_line, P.drag_bag
+        self.W = P.wet_weight
+        Kc = self.k * self.G @ self.ps
+        self.static = np.linalg.inv(np.diag(self.om2) + Kc)  # held: quasi-static compliance
+        self.zero_nb, self.zero_nr = np.zeros(self.nb), np.zeros(nr)
+
+
+def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
+    """f(t, x, u, params) -> (dx/dt, Aux) of the coupled plant; params = (Plant, Switches)
+    (a third element, the plant's :class:`Fast` arrays, saves rebuilding them)."""
+    P, sw = params[0], params[1]
+    F = params[2] if len(params) > 2 else Fast(P)
+    nr, nb = F.nr, F.nb
     q, v = x[:nr], x[nr : 2 * nr]
     n, H = x[2 * nr : 2 * nr + nb], x[-1]
-    ps, pp = P.psi_s[:, :nr], P.psi_p[:, :nr]
-    w_s, v_s = ps @ q, ps @ v
-    z, zd = pp @ q, pp @ v
-    g = P.gas
-    p = g.p_atm + g.rho * g.g * np.maximum(g.water_depth - z, 0.0)
-    V = np.minimum(n * g.RT / p, P.capacity)
-    F_bag = g.rho * g.g * V * sw.attached
-    vr = v_s - sw.current
-    line = -P.drag_line * np.abs(vr) * vr + sw.noise_s
-    sb = P.seabed
-    qc = -sb.stiffness * w_s - sb.damping * v_s
+    if not (sw.separated or sw.full):
+        return _held_rates(F, sw, q, n, u)
+    w_s, v_s = F.ps @ q, F.ps @ v
+    z, zd = F.pp @ q, F.pp @ v
+    p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
+    V = np.minimum(n * (F.RT / p), F.cap)
+    F_bag = F.rg * V * sw.attached
+    vr = v_s - sw.current if sw.current else v_s
+    qc = -F.k * w_s - F.c * v_s
     if sw.separated:
         active = (w_s < 0.0) & (qc > 0.0)
-        qc = np.where(active, qc, 0.0)
-        line = line + qc - H * P.hold_s
+        qc = qc * active
     else:
-        active = np.ones(w_s.shape, dtype=bool)
-        line = line + qc
-    vb = zd - sw.current
-    F_pt = F_bag - P.drag_bag * np.abs(vb) * vb * sw.attached
-    Q = P.psi_s[:, :nr].T @ (P.ws * line) + P.psi_b[:, :nr].T @ F_pt + P.Q_weight[:nr]
-    acc = Q - P.omega2[:nr] * q - P.damp[:nr] * v
-    fill = u[:nb] * sw.supply
-    purge = g.purge_max * np.clip(u[nb:], 0.0, 1.0) * np.sqrt(V / P.capacity)
-    ndot = p * (fill - purge) / g.RT - sw.leak * n
-    U = float(F_bag.sum()) - P.wet_weight
+        active = None
+    line = qc - F.drag * np.abs(vr) * vr
+    if sw.noisy:
+        line = line + sw.noise_s
+    vb = zd - sw.current if sw.current else zd
+    F_pt = F_bag - F.drag_bag * np.abs(vb) * vb * sw.attached
+    Q = F.G @ line + F.Gb @ F_pt + F.Qw
     if sw.separated:
-        Hdot = -H / sb.release_time
+        Q = Q - H * F.Qhold
+    acc = Q - F.om2 * q - F.damp * v
+    fill = u[:nb] * sw.supply
+    purge = F.purge_max * u[nb:] * np.sqrt(V * F.inv_cap)
+    ndot = p * (fill - purge) * (1.0 / F.RT) - sw.leak * n
+    U = float(F_bag.sum()) - F.W
+    if sw.separated:
+        Hdot = -H / F.tau
     else:
-        Hdot = -(sb.H0 / sb.breakout_time) * min(U / sb.H0, 1.0) if U > 0 else 0.0
+        Hdot = -(F.H0 / F.Tb) * min(U / F.H0, 1.0) if U > 0 else 0.0
     dx = np.concatenate([v, acc, ndot, [Hdot]])
     return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, line, F_pt)
+
+
+def _held_rates(F: Fast, sw, q, n, u):
+    """The rates while the hull is held (its mechanics quasi-static: see :func:`held_state`);
+    the strip loads are left out of Aux (None) unless ``sw.full``."""
+    nb = F.nb
+    z = F.pp @ q
+    p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
+    V = np.minimum(n * (F.RT / p), F.cap)
+    F_bag = F.rg * V * sw.attached
+    fill = u[:nb] * sw.supply
+    purge = F.purge_max * u[nb:] * np.sqrt(V * F.inv_cap)
+    ndot = p * (fill - purge) * (1.0 / F.RT) - sw.leak * n
+    U = float(F_bag.sum()) - F.W
+    Hdot = -(F.H0 / F.Tb) * min(U / F.H0, 1.0) if U > 0 else 0.0
+    dx = np.zeros(2 * F.nr + nb + 1)
+    dx[2 * F.nr : 2 * F.nr + nb] = ndot
+    dx[-1] = Hdot
+    zero = F.zero_nb
+    return dx, Aux(z, zero, V, p, F_bag, fill, purge, U, None, None, None, F.zero_nr, None, F_bag)
+
+
+def held_state(F: Fast, x: np.ndarray, sw) -> np.ndarray:
+    """The held hull's quasi-static modal coordinates on the tension-capable seabed spring,
+    under its weight and the bag forces at the gas state of ``x`` (velocities zero)."""
+    nr, nb = F.nr, F.nb
+    q = x[:nr]
+    for _ in range(1):  # the bags' depth barely depends on millimetres of q: one pass
+        z = F.pp @ q
+        p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
+        V = np.minimum(x[2 * nr : 2 * nr + nb] * (F.RT / p), F.cap)
+        Q = F.Gb @ (F.rg * V * sw.attached) + F.Qw
+        if sw.noisy:
+            Q = Q + F.G @ sw.noise_s
+        q = F.static @ Q
+    return q
 
 
 def observe(P: Plant, x: np.ndarray):

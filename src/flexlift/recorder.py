@@ -30,6 +30,8 @@ class Recorder:
         self.last = None
         self.limits = scenario.limits
         self.liftoff = False
+        self.resettled = False
+        self.inv_patm = 1.0 / P.gas.p_atm
 
     # ------------------------------------------------------------------ events
     def event(self, t: float, kind: str, bag: str | None, detail: str = "") -> None:
@@ -50,34 +52,38 @@ class Recorder:
         self.vented += volume_local
 
     # ------------------------------------------------------------------ samples
+    @property
+    def all_arrived(self) -> bool:
+        return not np.isnan(self.arrival).any()
+
     def sample(self, k, t, x, aux, u, cmd, ext, sw) -> None:
         P = self.P
-        nr = P.nr
-        dt = self.dt
-        self.gas_local += aux.fill * dt
-        self.gas_free += aux.fill * aux.pressure / P.gas.p_atm * dt
-        att = sw.attached > 0
-        v = float(np.max(np.abs(aux.zdot[att]))) if att.any() else 0.0
+        fdt = aux.fill * self.dt
+        self.gas_local += fdt
+        self.gas_free += fdt * aux.pressure * self.inv_patm
+        v = float(np.abs(aux.zdot * sw.attached).max())
         pitch = abs(float(x[1]) * P.pitch_slope)
         if v > self.vmax:
             self.vmax = v
             if v > self.limits.ascent_velocity_m_s and not self.has("limit_ascent_velocity"):
-                i = int(np.argmax(np.abs(aux.zdot) * att))
+                i = int(np.argmax(np.abs(aux.zdot) * sw.attached))
                 self.event(t, "limit_ascent_velocity", P.names[i], f"{v:.2f} m/s")
         if pitch > self.pmax:
             self.pmax = pitch
             if np.degrees(pitch) > self.limits.pitch_deg and not self.has("limit_pitch"):
                 self.event(t, "limit_pitch", None, f"{np.degrees(pitch):.1f} deg")
-        if sw.separated:
+        if sw.separated and not self.resettled:
             wmin = float(aux.w_s.min())
             if not self.liftoff and wmin > 0.05:
                 self.liftoff = True
                 self.event(t, "liftoff", None, "the whole hull is clear of the seabed")
-            elif self.liftoff and wmin < 0.0 and not self.has("resettle"):
+            elif self.liftoff and wmin < 0.0:
+                self.resettled = True
                 self.event(t, "resettle", None, "the hull touched the seabed again")
-        self.last = (t, x.copy(), aux, u.copy(), cmd, ext, sw.separated, sw.attached.copy())
+        self.last = (t, x, aux, u, cmd, ext, sw.separated, sw.attached)
         if k % self.k_out == 0:
             self._store()
+            self.stored_t = t
         if k % self.k_str == 0:
             self._snapshot(t, x, aux, sw)
 
@@ -86,10 +92,11 @@ class Recorder:
         P = self.P
         nb, nr = P.nb, P.nr
         # static (mdc) correction of the eliminated modes at the bag points
-        Q = P.psi_s.T @ (P.ws * aux.line) + P.psi_b.T @ aux.point + P.Q_weight
         qs = np.zeros(P.modes.n_modes)
         qs[:nr] = x[:nr]
-        qs[nr:] = Q[nr:] / P.omega2[nr:]
+        if aux.line is not None:
+            Q = P.psi_s.T @ (P.ws * aux.line) + P.psi_b.T @ aux.point + P.Q_weight
+            qs[nr:] = Q[nr:] / P.omega2[nr:]
         z = P.psi_p @ qs
         theta = P.dpsi_p @ qs
         theta_rate = P.dpsi_p[:, :nr] @ x[nr : 2 * nr]
@@ -103,6 +110,7 @@ class Recorder:
         row = {
             "time": t,
             "height": z,
+            "reference_height": on_ext(cmd[4]) if len(cmd) > 4 else full,
             "ascent_velocity": aux.zdot,
             "pitch_angle": theta,
             "pitch_rate": theta_rate,
@@ -110,14 +118,14 @@ class Recorder:
             "gas_volume": aux.volume,
             "lift": aux.bag_force,
             "fill_rate": aux.fill,
-            "purge_opening": np.where(P.external, u[nb:], np.nan),
+            "purge_opening": np.where(P.external, u[nb:], np.nan).copy(),
             "supervisor_output": on_ext(cmd[2]),
             "desired_volume": on_ext(cmd[3]),
             "heave": float(P.psi_s[0, 0] * x[0]),
             "pitch": float(x[1] * P.pitch_slope),
             "holding_force": float(x[-1]),
             "uplift": aux.uplift,
-            "contact_force": float(P.ws @ aux.contact),
+            "contact_force": float(P.ws @ aux.contact) if aux.contact is not None else np.nan,
         }
         for key, val in row.items():
             self.rows.setdefault(key, []).append(val)
@@ -141,6 +149,6 @@ class Recorder:
         )
 
     def finish(self, error: str | None) -> Result:
-        if self.last is not None and (not self.rows or self.rows["time"][-1] != self.last[0]):
+        if self.last is not None and (not self.rows or self.stored_t != self.last[0]):
             self._store()
         return build_result(self, error)

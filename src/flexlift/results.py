@@ -29,6 +29,7 @@ BAG_VARS = {
     "purge_opening": ("1", "purge valve opening"),
     "supervisor_output": ("1", "supervisory fuzzy controller output u"),
     "desired_volume": ("m3", "desired gas volume V_d"),
+    "reference_height": ("m", "reference trajectory z_ref of the bag's point"),
 }
 HULL_VARS = {
     "heave": ("m", "rigid heave of the hull's centre of mass above the seabed"),

@@ -29,7 +29,7 @@ import numpy as np
 from flexlift import constants as C
 from flexlift.control import Controller, control_params, fuzzy_engines
 from flexlift.errors import InputError, SimulationError
-from flexlift.plant import Switches, build_plant, dynamics, observe, step_matrix
+from flexlift.plant import Fast, Switches, build_plant, dynamics, held_state, step_matrix
 from flexlift.recorder import Recorder
 from flexlift.results import Result
 
@@ -109,18 +109,25 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
 
     x = P.initial_state()
     u = np.zeros(2 * nb)
-    mats = {"held": step_matrix(P, dt, np.ones(P.xs.size, bool)), "free": step_matrix(P, dt, None)}
+    F = Fast(P)
+    params = (P, sw, F)
+    sw.noisy = dist.force_noise_N_m > 0
+    M_free = step_matrix(P, dt, None)
     rec = Recorder(P, scenario, mode, dt)
     last = (np.zeros(nb), np.zeros(nb), np.zeros(nb))
     cmd = (np.zeros(ext.size), np.zeros(ext.size), np.zeros(ext.size), np.zeros(ext.size))
     H0 = P.seabed.H0
     tol, target = lim.arrival_tolerance_m, c.target_height_m
+    hold_time = sim.hold_time_s
     hold_since = None
-    clear_depth = lim.surface_clearance_m
-    surf = env.water_depth_m
+    top_limit = env.water_depth_m - lim.surface_clearance_m - P.top_offset
     error = None
-    nm_state = 2 * nr
+    m2 = 2 * nr
+    nsl = slice(m2, m2 + nb)
+    closed = ~P.external
+    relief = np.where(closed, P.gas.relief, 0.0)
     report_every = max(1, n_steps // 100)
+    any_sensor_fault = False
     t = 0.0
     for k in range(n_steps + 1):
         t = k * dt
@@ -142,87 +149,91 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
                 frozen[i] = True
             elif f.kind == "sensor_dropout":
                 frozen[i], frozen_until[i] = True, t + f.duration_s
-            if f.kind.startswith("sensor") and i not in ctrl_idx:
-                detail = "no controller on this bag: no effect"
+            if f.kind.startswith("sensor"):
+                any_sensor_fault = True
+                if i not in ctrl_idx:
+                    detail = "no controller on this bag: no effect"
             rec.event(t, f.kind, f.bag, detail)
             fi += 1
-        if dist.force_noise_N_m > 0:
+        if sw.noisy:
             noise_el = ou_a * noise_el + ou_b * rng.standard_normal(noise_el.size)
             sw.noise_s = np.repeat(noise_el, strips_per_el)
+        if not sw.separated:
+            x[:nr] = held_state(F, x, sw)
         if k % k_ctrl == 0:
-            # measurements (what the controllers see)
-            zt, zdt, Vt = observe(P, x)
-            zm = zt + drift * np.maximum(t - drift_t0, 0.0)
-            zdm, Vm = zdt, Vt
+            # measurements: what the controllers see
+            q = x[:nr]
+            zm = F.pp @ q
+            zdm = F.pp @ x[nr:m2]
+            Vm = np.minimum(x[nsl] * (F.RT / (F.p_atm + F.rg * np.maximum(F.depth - zm, 0.0))), F.cap)
+            if any_sensor_fault:
+                zm = zm + drift * np.maximum(t - drift_t0, 0.0)
             if noisy:
                 zm = zm + c.height_noise_m * meas_rng.standard_normal(nb)
                 zdm = zdm + c.velocity_noise_m_s * meas_rng.standard_normal(nb)
                 Vm = Vm + c.volume_noise_m3 * meas_rng.standard_normal(nb)
-            thaw = frozen & (t >= frozen_until)
-            frozen[thaw] = False
-            if frozen.any():
+            if any_sensor_fault:
+                frozen &= t < frozen_until
                 zm = np.where(frozen, last[0], zm)
                 zdm = np.where(frozen, last[1], zdm)
                 Vm = np.where(frozen, last[2], Vm)
-            last = (zm, zdm, Vm)
+                last = (zm, zdm, Vm)
             cmd = ctrl.step(t, zm[ext], zdm[ext], Vm[ext], sw.separated)
-            u = np.zeros(2 * nb)
             u[ext] = cmd[0]
             u[nb + ext] = cmd[1]
-        dx, aux = dynamics(t, x, u, (P, sw))
+        sw.full = k % rec.k_out == 0 or k % rec.k_str == 0
+        dx, aux = dynamics(t, x, u, params)
         rec.sample(k, t, x, aux, u, cmd, ext, sw)
-        if not np.all(np.isfinite(dx)):
-            error = f"numerics failed at t = {t:.1f} s: non-finite state derivative"
-            break
         # events on the current state
         if not sw.separated and aux.uplift > x[-1]:
             sw.separated = True
             rec.event(t, "separation", None, f"uplift {aux.uplift / (C.TONNE * g):.0f} t")
-        tops = aux.z + P.top_offset
-        if np.any((surf - tops < clear_depth) & (sw.attached > 0)):
-            i = int(np.argmax(tops * (sw.attached > 0)))
-            rec.event(t, "surface_breach", P.names[i], "the run ends at the surface")
-            break
+        if (aux.z > top_limit).any():
+            live = (aux.z > top_limit) & (sw.attached > 0)
+            if live.any():
+                rec.event(t, "surface_breach", P.names[int(np.argmax(live))], "the run ends at the surface")
+                break
         if sw.separated:
             within = np.abs(aux.z - target) <= tol
-            rec.arrivals(t, within)
-            if np.all(within | (sw.attached == 0)):
+            if not rec.all_arrived:
+                rec.arrivals(t, within)
+            if within.all() or (within | (sw.attached == 0)).all():
                 hold_since = t if hold_since is None else hold_since
-                if t - hold_since >= scenario.simulation.hold_time_s:
-                    rec.event(t, "target_held", None, f"held {scenario.simulation.hold_time_s:.0f} s")
+                if t - hold_since >= hold_time - 1e-9:
+                    rec.event(t, "target_held", None, f"held {hold_time:.0f} s")
                     break
             else:
                 hold_since = None
         if k == n_steps:
             break
-        # step
-        if not sw.separated:
-            Minv = mats["held"]
-        elif aux.active.any():
-            Minv = step_matrix(P, dt, aux.active)
-        else:
-            Minv = mats["free"]
+        # step: linearly implicit trapezoidal rule on the mechanics, explicit on the rest
         step = dt * dx
-        step[:nm_state] = Minv @ step[:nm_state]
-        x = x + step
-        # spill and relief at the new depths
-        nsl = slice(nm_state, nm_state + nb)
-        z_new = P.psi_p[:, :nr] @ x[:nr]
-        p_new = P.gas.pressure(z_new)
-        n_max = P.gas.max_moles(p_new, P.capacity, ~P.external)
-        over = x[nsl] > n_max
-        if over.any():
-            rec.vent(np.where(over, (x[nsl] - n_max) * P.gas.RT / p_new, 0.0))
-            x[nsl] = np.minimum(x[nsl], n_max)
-        x[nsl] = np.maximum(x[nsl], 0.0)
-        x[-1] = max(x[-1], 0.0)
-        if sw.separated and not rec.has("breakout") and x[-1] < 1e-3 * H0:
+        if sw.separated:
+            act = aux.active if aux.active is not None else np.ones(P.xs.size, dtype=bool)
+            Minv = step_matrix(P, dt, act) if act.any() else M_free
+            step[:m2] = Minv @ step[:m2]
+        else:
+            step[:m2] = 0.0
+        x += step
+        # spill (open bags) and relief venting (closed bags) at the local pressure
+        n_max = (aux.pressure + relief) * P.capacity * (1.0 / F.RT)
+        over = x[nsl] - n_max
+        if (over > 0).any():
+            over = np.maximum(over, 0.0)
+            rec.vent(over * F.RT / aux.pressure)
+            x[nsl] -= over
+        if x[-1] < 0.0:
+            x[-1] = 0.0
+        if sw.leak.any():
+            x[nsl] = np.maximum(x[nsl], 0.0)
+        if sw.separated and x[-1] < 1e-3 * H0 and not rec.has("breakout"):
             rec.event(t + dt, "breakout", None, "holding force below 0.1 % of H0")
-        if progress is not None and k % report_every == 0:
-            progress(k / n_steps)
-        if not np.all(np.isfinite(x)) or np.abs(x[:nm_state]).max() > 1e9:
-            error = f"numerics failed at t = {t + dt:.1f} s: state blew up"
-            break
+        if k % report_every == 0:
+            if progress is not None:
+                progress(k / n_steps)
+            if not np.all(np.isfinite(x)) or np.abs(x[:m2]).max() > 1e9:
+                error = f"numerics failed at t = {t + dt:.1f} s: the state is not finite or blew up"
+                break
     if progress is not None:
         progress(1.0)
     result = rec.finish(error)
