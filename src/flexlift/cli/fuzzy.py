@@ -1,0 +1,257 @@
+"""``flexlift fuzzy``: the supervisory fuzzy controller (SPEC §7) — draw it, tabulate it,
+evaluate it.
+
+Without ``--fis`` the built-in supervisory system is used, with the operators of the
+scenario's ``control.supervisor`` section; ``--fis FILE`` loads a MATLAB ``.fis`` file
+(Mamdani, one output) instead. Inputs are the normalised error ``ze`` and error rate ``w`` in
+[-1, 1]; values beyond a range are saturated (clipped) to it.
+
+  --grid N --json   {"ze": [N], "w": [N], "u": [[N x N]]} with u[i][j] at (ze[i], w[j]),
+                    over each input's range ([-1, 1] for the built-in system)
+  --eval ZE,W       {"u": value} with --json (write --eval=-0.5,0.2 for a negative first value)
+  --out DIR         figures (figures/fuzzy_*.png), tables (tables/fuzzy_*.csv) and the
+                    system as fuzzy_supervisor.fis
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from flexlift._io import write_text
+from flexlift.cli._common import (
+    add_json_arg,
+    add_out_arg,
+    add_scenario_arg,
+    check_out_dir,
+    emit_json,
+    positive_int,
+    scenario_from,
+)
+from flexlift.errors import InputError
+from flexlift.fis import read_fis, to_fis_text
+from flexlift.fuzzy import FIS
+from flexlift.outputs import Figure, StageOutput, Table
+from flexlift.rulebase import fill_fis, supervisor_fis_from
+
+NAME = "fuzzy"
+SURFACE_GRID = 81  # the table the simulation may use instead of exact inference
+PLOT_GRID = 61
+
+
+def _eval_point(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(t) for t in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--eval needs numbers separated by a comma such as 0.2,-0.1, got {text!r}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"--eval needs finite numbers, got {text!r}")
+    return values
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(NAME, help="the supervisory fuzzy controller: sets, rules, surface",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_scenario_arg(p)
+    p.add_argument("--fis", type=Path, default=None,
+                   help="a MATLAB .fis file to use instead of the built-in supervisory system")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--grid", type=positive_int("--grid"), default=None,
+                      help="tabulate u on an N x N grid of the two inputs")
+    what.add_argument("--eval", type=_eval_point, default=None, metavar="ZE,W",
+                      help="evaluate u at one point of the inputs")
+    add_out_arg(p, "figures, tables and the .fis file")
+    add_json_arg(p)
+    p.set_defaults(func=_main)
+
+
+def load_system(scenario, fis_file: str | Path | None = None) -> FIS:
+    """The built-in supervisor with the scenario's operators, or a MATLAB .fis file."""
+    if fis_file is not None:
+        return read_fis(fis_file, resolution=scenario.control.supervisor.resolution)
+    return supervisor_fis_from(scenario.control.supervisor)
+
+
+def grid_values(fis: FIS, n: int) -> dict:
+    """u on an n x n grid over the two inputs' ranges: {"ze", "w", "u"} (u[i][j] at ze[i], w[j])."""
+    if fis.n_inputs != 2:
+        raise InputError("--grid", n, f"needs a two-input system; this one has {fis.n_inputs}")
+    if n < 2:
+        raise InputError("--grid", n, "at least 2 points per input")
+    ze = np.linspace(*fis.inputs[0].range, n)
+    w = np.linspace(*fis.inputs[1].range, n)
+    P = np.stack(np.meshgrid(ze, w, indexing="ij"), axis=-1).reshape(-1, 2)
+    return {"ze": ze.tolist(), "w": w.tolist(), "u": fis(P).reshape(n, n).tolist()}
+
+
+def _rule_table(fis: FIS) -> Table:
+    if fis.n_inputs == 2:
+        a, b = fis.inputs
+        cells = [[""] * len(b.mfs) for _ in a.mfs]
+        for r in fis.rules:
+            i, j = r.antecedent
+            if i is not None and j is not None and not any(r.negated) and r.connective == "and":
+                label = fis.output.mfs[r.consequent].name
+                cells[i][j] = f"{cells[i][j]}/{label}" if cells[i][j] else label
+        complete = all(all(c) for c in cells) and len(fis.rules) == len(a.mfs) * len(b.mfs)
+        if complete:
+            rows = [[a.mfs[i].name, *cells[i]] for i in reversed(range(len(a.mfs)))]
+            return Table(f"Rule table: {fis.output.name} by {a.name} (rows) and {b.name} (columns)",
+                         [f"{a.name} \\ {b.name}", *b.labels], rows,
+                         note=f"{fis.and_method}/{fis.or_method} inference, "
+                              f"{fis.implication} implication, {fis.aggregation} aggregation, "
+                              f"{fis.defuzzification} on {fis.resolution} points")
+    rows = []
+    for k, r in enumerate(fis.rules, 1):
+        parts = [f"{'NOT ' if n else ''}{v.name} is {v.mfs[i].name}"
+                 for i, n, v in zip(r.antecedent, r.negated, fis.inputs) if i is not None]
+        then = f"{'NOT ' if r.consequent_negated else ''}{fis.output.mfs[r.consequent].name}"
+        rows.append([k, f" {r.connective.upper()} ".join(parts), then, r.weight])
+    return Table(f"Rules of {fis.name!r}", ["rule", "if", f"then {fis.output.name} is", "weight"],
+                 rows)
+
+
+def _sets_table(fis: FIS) -> Table:
+    rows = [[v.name, m.name, m.kind, " ".join(f"{p:.6g}" for p in m.params)]
+            for v in (*fis.inputs, fis.output) for m in v.mfs]
+    return Table("Membership functions (MATLAB parameter order)",
+                 ["variable", "set", "type", "parameters"], rows)
+
+
+def _csv(table: Table) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(table.columns)
+    w.writerows(table.rows)
+    return buf.getvalue()
+
+
+def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = None,
+              grid: int = SURFACE_GRID) -> StageOutput:
+    """Build (or load) the supervisory FIS, tabulate its surface, measure the interpolation
+    error; figures and tables under ``out`` if given.
+
+    fis_file : a MATLAB .fis file instead of the built-in system (default: built-in)
+    grid : points per input of the interpolated surface table [-]
+    """
+    fis = load_system(scenario, fis_file)
+    summary: dict = {
+        "system": fis.name,
+        "source": str(fis_file) if fis_file is not None else "built-in (SPEC §7)",
+        "inputs": [{"name": v.name, "range": list(v.range), "sets": list(v.labels)}
+                   for v in fis.inputs],
+        "output": {"name": fis.output.name, "range": list(fis.output.range),
+                   "sets": list(fis.output.labels)},
+        "n_rules": len(fis.rules),
+        "operators": {k: getattr(fis, k) for k in ("and_method", "or_method", "implication",
+                                                   "aggregation", "defuzzification")},
+        "resolution": fis.resolution,
+    }
+    criteria: dict[str, bool] = {}
+    surf = None
+    if fis.n_inputs == 2:
+        surf = fis.surface(grid=grid)
+        lo, hi = np.array([v.range[0] for v in fis.inputs]), np.array([v.range[1] for v in fis.inputs])
+        q = np.random.default_rng(1).uniform(lo, hi, (4000, 2))
+        mid = 0.5 * (lo + hi)
+        summary["u_at_centre"] = fis(mid)
+        summary["surface"] = {"grid": grid, "max_error": surf.max_error,
+                              "error_bound": surf.error_bound, "checked_points": surf.n_checked}
+        summary["symmetry_error"] = float(np.max(np.abs(fis(q) + fis(2 * mid - q))))
+        criteria["surface_interpolation_error_below_0.01"] = surf.max_error < 0.01
+        if fis_file is None:
+            criteria["surface_odd_symmetric"] = summary["symmetry_error"] < 1e-9
+    if fis_file is None:
+        fill = fill_fis()
+        summary["fill_map"] = {"d": [-1.0, 0.0, 0.25, 0.5, 0.75, 1.0],
+                               "fill": [fill(d) for d in (-1.0, 0.0, 0.25, 0.5, 0.75, 1.0)]}
+    tables = [_rule_table(fis), _sets_table(fis)]
+    figures: list[Figure] = []
+    if out is not None:
+        figures = _write(Path(out), fis, tables, fis_file is None)
+    return StageOutput(name=NAME, summary=summary, figures=figures, tables=tables,
+                       criteria=criteria)
+
+
+def _write(out: Path, fis: FIS, tables: list[Table], builtin: bool) -> list[Figure]:
+    from flexlift.plots._style import save
+    from flexlift.plots.fuzzy import (
+        plot_map,
+        plot_memberships,
+        plot_surface_3d,
+        plot_surface_contour,
+    )
+
+    fdir, tdir = out / "figures", out / "tables"
+    figures = [Figure(save(plot_memberships(fis), fdir / "fuzzy_memberships.png"),
+                      f"Membership functions of the {fis.name} inputs and output.")]
+    if fis.n_inputs == 2:
+        g = grid_values(fis, PLOT_GRID)
+        labels = (fis.inputs[0].name, fis.inputs[1].name, fis.output.name)
+        u = np.array(g["u"])
+        figures.append(Figure(
+            save(plot_surface_3d(g["ze"], g["w"], u, labels, title=f"Control surface of {fis.name}"), fdir / "fuzzy_surface_3d.png"),
+            f"Control surface {labels[2]}({labels[0]}, {labels[1]}) by exact inference."))
+        centres = [[m.params[1] if m.kind == "gaussmf" else np.nan for m in v.mfs]
+                   for v in fis.inputs]
+        figures.append(Figure(
+            save(plot_surface_contour(g["ze"], g["w"], u, labels, centres=centres,
+                                      title=f"Control surface of {fis.name}"),
+                 fdir / "fuzzy_surface_contour.png"),
+            "Control surface as contours; the black line is u = 0."))
+    if builtin:
+        fill = fill_fis()
+        d = np.linspace(-1.0, 1.0, 401)
+        figures.append(Figure(save(plot_map(d, fill(d)), fdir / "fuzzy_fill_map.png"),
+                              "SIFSMC fill map: signed distance d to the fill fraction of "
+                              "Q_in,max (zero for d <= 0)."))
+    write_text(tdir / "fuzzy_rules.csv", _csv(tables[0]))
+    write_text(tdir / "fuzzy_sets.csv", _csv(tables[1]))
+    write_text(out / "fuzzy_supervisor.fis", to_fis_text(fis))
+    return figures
+
+
+def _main(args) -> int:
+    check_out_dir(args.out)
+    scenario = scenario_from(args)
+    if args.eval is None and args.grid is None:
+        res = run_stage(scenario, args.out, fis_file=args.fis)
+        if args.json:
+            emit_json(res.summary)
+            return 0
+        s = res.summary
+        w = sys.stdout.write
+        w(f"{s['system']} ({s['source']}): {len(s['inputs'])} inputs, {s['n_rules']} rules, "
+          f"{'/'.join(s['operators'].values())} on {s['resolution']} points\n")
+        if "surface" in s:
+            w(f"  interpolated surface {s['surface']['grid']}x{s['surface']['grid']}: max error "
+              f"{s['surface']['max_error']:.2e} (bound {s['surface']['error_bound']:.2e})\n")
+        if args.out is not None:
+            w(f"  figures and tables written under {args.out}\n")
+        return 0
+    fis = load_system(scenario, args.fis)
+    if args.eval is not None:
+        if len(args.eval) != fis.n_inputs:
+            raise InputError("--eval", ",".join(map(str, args.eval)),
+                             f"{fis.n_inputs} comma-separated numbers, one per input")
+        result = {"u": fis(np.array(args.eval)) if fis.n_inputs > 1 else fis(args.eval[0])}
+    else:
+        result = grid_values(fis, args.grid)
+    if args.out is not None:
+        run_stage(scenario, args.out, fis_file=args.fis)
+    if args.json:
+        emit_json(result)
+    elif args.eval is not None:
+        sys.stdout.write(f"u = {result['u']:.6g}\n")
+    else:
+        u = np.array(result["u"])
+        sys.stdout.write(f"u on a {args.grid}x{args.grid} grid: min {u.min():.4g}, max "
+                         f"{u.max():.4g} (use --json for the values)\n")
+    return 0
