@@ -9,7 +9,7 @@ from __future__ import annotations
 import base64
 import html
 import math
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 
 from flexlift import __version__
 from flexlift.outputs import StageOutput
@@ -112,7 +112,7 @@ def _particulars(scenario) -> str:
 
 def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
     """The whole report as one HTML page (figures embedded as base64 PNG)."""
-    generated = generated or datetime.now(timezone.utc)
+    generated = generated or datetime.now(UTC)
     criteria = {f"{s.name}: {k}": v for s in stages for k, v in s.criteria.items()}
     warnings = [(s.name, w) for s in stages for w in s.warnings]
     ok = all(criteria.values()) and not warnings
