@@ -214,7 +214,8 @@ class Controller:
         self.prev_excess = np.zeros(n)
         self.prev_eps = None
         self.eps_rate = np.zeros(n)
-        self.t_sep = None
+        self.t_sep = np.full(n, np.nan)
+        self.pending = True  # some bag has not separated yet
         self.z0 = np.zeros(n)
         self.active = np.ones(n, dtype=bool)  # False once a bag is lost (sling break)
         self.zeros = np.zeros(n)
@@ -233,9 +234,7 @@ class Controller:
         return bool(self.active.all())
 
     def reference(self, t: float):
-        """(z_ref, ż_ref) per bag [m, m/s] (zeros before separation)."""
-        if self.t_sep is None:
-            return self.zeros, self.zeros
+        """(z_ref, ż_ref) per bag [m, m/s]; a bag not yet separated keeps its start height."""
         if self.prof is None:
             p = self.p
             D = np.abs(p.target - self.z0)
@@ -245,25 +244,28 @@ class Controller:
             self.prof = (np.sign(p.target - self.z0), D, vp, ta, ta + tc, 2 * ta + tc)
         sgn, D, vp, ta, tb, T = self.prof
         a = self.p.accel
-        tau = max(t - self.t_sep, 0.0)
+        tau = np.maximum(np.nan_to_num(t - self.t_sep, nan=0.0), 0.0)
         r = np.maximum(T - tau, 0.0)
         pos = np.where(tau < ta, 0.5 * a * tau * tau, np.where(tau < tb, vp * (tau - 0.5 * ta), D - 0.5 * a * r * r))
         vel = np.minimum(np.minimum(a * tau, vp), a * r)
         return self.z0 + sgn * pos, sgn * vel
 
-    def step(self, t: float, z, zdot, V, separated: bool):
+    def step(self, t: float, z, zdot, V, separated):
         """One control sample from measured heights [m], velocities [m/s] and gas volumes
-        [m^3]. Returns (fill [m^3/s], purge opening [-], supervisor u [-], V_d [m^3],
-        z_ref [m])."""
+        [m^3]; ``separated`` a bool (the hull) or one per bag (the paper's uncoupled bags).
+        Returns (fill [m^3/s], purge opening [-], supervisor u [-], V_d [m^3], z_ref [m])."""
         p = self.p
-        if separated and self.t_sep is None:
-            self.t_sep = t
+        if self.pending and np.any(separated):
+            new = np.asarray(separated, dtype=bool) & np.isnan(self.t_sep)
+            self.t_sep = np.where(new, t, self.t_sep)
             live = self.active
             if p.mode == "coordinated":
                 self.z0 = np.full_like(self.z0, float(np.mean(z[live])) if live.any() else 0.0)
             else:
-                self.z0 = np.array(z, dtype=float)
-        if p.mode == "open-loop" or self.t_sep is None:
+                self.z0 = np.where(new, z, self.z0)
+            self.prof = None
+            self.pending = bool(np.isnan(self.t_sep).any())
+        if p.mode == "open-loop" or np.isnan(self.t_sep[0]) and self.pending and np.isnan(self.t_sep).all():
             V_d = self.V_hold
             u = self.zeros
             z_ref = self.zeros
@@ -271,6 +273,10 @@ class Controller:
             z_ref, zd_ref = self.reference(t)
             u = self._sup((z_ref - z) * self.inv_e, (zd_ref - zdot) * self.inv_r)
             V_d = p.V_neutral + u * p.dV_max
+            if self.pending:
+                pre = np.isnan(self.t_sep)
+                V_d = np.where(pre, self.V_hold, V_d)
+                u = np.where(pre, 0.0, u)
         if self.coordinated and self.active.sum() > 1:
             live = self.active
             xl = p.x[live] - p.x[live].mean()
