@@ -164,6 +164,7 @@ class ControlParams:
     fill_max: float  # [m^3/s]
     k_pitch: float  # [m^3/rad]
     k_pitch_rate: float  # [m^3 s/rad]
+    deadband: float = 0.0  # [m^3]
 
 
 def control_params(scenario, x, V_neutral, capacity, rho, g, hold_centroid=None, mode=None):
@@ -199,6 +200,7 @@ def control_params(scenario, x, V_neutral, capacity, rho, g, hold_centroid=None,
         fill_max=scenario.gas.fill_rate_max_m3_s,
         k_pitch=c.coordination.pitch_gain_m3_rad,
         k_pitch_rate=c.coordination.pitch_rate_gain_m3s_rad,
+        deadband=c.volume_deadband_m3,
     )
 
 
@@ -290,7 +292,7 @@ class Controller:
         self.eps_rate = self.eps_rate + self.a_filt * ((eps - self.prev_eps) * self.inv_T - self.eps_rate)
         self.prev_eps = eps
         d = (self.eps_rate + p.lam * eps) * self.d_gain
-        fill = self.fill(np.minimum(np.maximum(d, -1.0), 1.0)) * (eps > 0) * p.fill_max
+        fill = self.fill(np.minimum(np.maximum(d, -1.0), 1.0)) * (eps > p.deadband) * p.fill_max
         excess = -eps
         if p.mode == "open-loop":
             opening = self.zeros
@@ -300,7 +302,7 @@ class Controller:
                 raw = raw + p.kd * (excess - self.prev_excess) * self.inv_T
             hold = ((raw >= 1.0) & (excess > 0)) | ((raw <= 0.0) & (excess < 0))
             self.integ = np.maximum(self.integ + excess * p.period * ~hold, 0.0)
-            opening = np.minimum(np.maximum(raw, 0.0), 1.0) * (excess > 0)
+            opening = np.minimum(np.maximum(raw, 0.0), 1.0) * (excess > p.deadband)
         self.prev_excess = excess
         if not self.all_active:
             fill = fill * self.active

@@ -15,8 +15,6 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from flexlift import constants as C
-
 BAG_VARS = {
     "height": ("m", "height of the bag's point above the seabed"),
     "ascent_velocity": ("m/s", "vertical velocity of the bag's point"),

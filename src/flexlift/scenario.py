@@ -261,6 +261,7 @@ class Control(_Section):
     ascent_speed_m_s: Pos = 0.2
     ascent_acceleration_m_s2: Pos = 0.002
     breakout_pull_t: NonNeg = 150.0  # extra buoyancy held until the hull lifts off
+    volume_deadband_m3: NonNeg = 0.2  # |V_d - V| below this: neither fill nor purge
     supervisor: Supervisor = Supervisor()
     fill: FillControl = FillControl()
     purge: PurgeControl = PurgeControl()

@@ -1,0 +1,182 @@
+"""The ascent: rest, acceptance on the tanker, time-step convergence, symmetry, faults."""
+
+import numpy as np
+import pytest
+
+from flexlift.errors import InputError, SimulationError
+from flexlift.scenario import load_scenario
+from flexlift.simulate import simulate
+
+#: a short ascent (40 m, quick breakout) for the checks that need several runs
+QUICK = {
+    "control.target_height_m": 40.0,
+    "seabed.breakout_time_s": 100.0,
+    "simulation.hold_time_s": 60.0,
+    "simulation.duration_s": 1500.0,
+}
+
+
+@pytest.fixture(scope="session")
+def quick():
+    return load_scenario("tanker").with_changes(**QUICK)
+
+
+@pytest.fixture(scope="session")
+def tanker_runs():
+    sc = load_scenario("tanker")
+    return {m: simulate(sc, control=m) for m in ("decentralized", "coordinated", "open-loop")}
+
+
+@pytest.fixture(scope="session")
+def quick_runs(quick):
+    return {m: simulate(quick, control=m) for m in ("decentralized", "paper")}
+
+
+# ----------------------------------------------------------------------------- acceptance
+@pytest.mark.parametrize("mode", ["decentralized", "coordinated"])
+def test_closed_loop_modes_meet_every_criterion(tanker_runs, mode):
+    r = tanker_runs[mode]
+    assert r.criteria == {k: True for k in
+                          ("ascent_velocity", "pitch", "reached_target", "no_surface_breach", "no_resettle")}
+    ds = r.dataset
+    # every bag point ends within the tolerance of the 300 m target
+    assert np.all(np.abs(ds.height.values[-1] - 300.0) <= 1.0)
+    assert r.headline["max_ascent_velocity_ms"] < 0.6
+    kinds = [e["kind"] for e in r.events]
+    assert kinds.index("separation") < kinds.index("breakout") < kinds.index("target_held")
+
+
+def test_coordinated_is_more_level_and_no_more_spread(tanker_runs):
+    d, c = tanker_runs["decentralized"].headline, tanker_runs["coordinated"].headline
+    assert c["max_pitch_deg"] < d["max_pitch_deg"]
+    assert c["arrival_spread_s"] <= d["arrival_spread_s"]
+
+
+def test_open_loop_runs_away(tanker_runs):
+    r = tanker_runs["open-loop"]
+    assert not r.criteria["ascent_velocity"]
+    assert r.headline["max_ascent_velocity_ms"] > 0.6
+    assert r.event_time("limit_ascent_velocity") is not None
+
+
+def test_breakout_follows_spec_timing(tanker_runs, tanker_plan):
+    """Separation under the 150 t pull: T_b (H0/U - 1) after the pull is in, plus the fill."""
+    r = tanker_runs["decentralized"]
+    H0 = 0.3 * tanker_plan.wet_weight
+    U = 150e3 * 9.81
+    t_formula = 400.0 * (H0 / U - 1.0)
+    t_fill = 150e3 / 1025.0 / (4 * 0.5)  # four bags at 0.5 m3/s
+    t_sep = r.event_time("separation")
+    assert t_formula < t_sep < t_formula + t_fill + 60.0
+    # then H releases from H_sep ~ U (150 t) with tau_r = 30 s to 0.1 % of H0
+    assert r.event_time("breakout") - t_sep == pytest.approx(30.0 * np.log(U / (1e-3 * H0)), abs=2.0)
+
+
+def test_gas_accounting(tanker_runs):
+    ds = tanker_runs["decentralized"].dataset
+    h = tanker_runs["decentralized"].headline
+    # free air exceeds the local volume by up to the pressure ratio at the seabed (~36)
+    assert h["gas_used_local_m3"] < h["gas_used_free_air_m3"] < 36.2 * h["gas_used_local_m3"]
+    # internal bags are never filled and stay full
+    internal = ds.bag_kind.values == "internal"
+    assert np.all(ds.gas_used_local.values[internal] == 0)
+    np.testing.assert_allclose(ds.gas_volume.values[-1, internal], 517e3 / 1025 / 9.81 * 9.81, rtol=1e-6)
+
+
+# ----------------------------------------------------------------------------- physics
+def test_neutral_hull_at_rest_stays_at_rest():
+    sc = load_scenario("tanker").with_changes(**{"control.breakout_pull_t": 0.0})
+    r = simulate(sc, duration=300.0)
+    ds = r.dataset
+    # millimetres of static flexure on the seabed spring, and no motion at all
+    assert np.abs(ds.height.values).max() < 5e-3
+    assert np.ptp(ds.height.values, axis=0).max() < 1e-6
+    assert np.abs(ds.ascent_velocity.values).max() < 1e-6
+    np.testing.assert_allclose(ds.gas_volume.values[-1], ds.gas_volume.values[0], rtol=1e-6)
+    assert r.event_time("separation") is None
+
+
+def test_halving_the_time_step(quick_runs, quick):
+    a = quick_runs["decentralized"].headline
+    half = simulate(quick.with_changes(**{"simulation.time_step_s": 0.05}))
+    b = half.headline
+    for key in ("separation_time_s", "breakout_time_s", "max_ascent_velocity_ms",
+                "max_bending_moment_MNm"):
+        assert b[key] == pytest.approx(a[key], rel=0.01), key
+    ta = quick_runs["decentralized"].dataset.arrival_time.values
+    tb = half.dataset.arrival_time.values
+    np.testing.assert_allclose(tb, ta, rtol=0.01)
+    # integrals of on/off valve commands are more sensitive: within 3 %
+    for key in ("gas_used_local_m3", "max_pitch_deg"):
+        assert b[key] == pytest.approx(a[key], rel=0.03), key
+
+
+def test_mirror_symmetry(quick):
+    """A layout and suction turned end for end give the mirrored pitch."""
+    L = quick.hull.length_m
+    xs = [5.0, 25.0, 45.0, 70.0]
+    def layout(xx, stern, bow):
+        bags = [{"name": f"bag_{k + 1}", "kind": "external", "x_m": x} for k, x in enumerate(xx)]
+        bags += [{"name": f"bag_{k + 5}", "kind": "internal", "span_m": [a, b]}
+                 for k, (a, b) in enumerate([(14.18, 30.73), (30.73, 47.29), (47.29, 63.84)])]
+        return quick.with_changes(**{"lift.bags": bags, "seabed.stern_ratio": stern,
+                                     "seabed.bow_ratio": bow, "simulation.duration_s": 700.0})
+    a = simulate(layout(xs, 0.5, 1.5), control="decentralized")
+    m = simulate(layout([L - x for x in xs][::-1], 1.5, 0.5), control="decentralized")
+    pa, pm = a.dataset.pitch.values, m.dataset.pitch.values
+    assert np.abs(pa).max() > 1e-3  # the case does pitch
+    np.testing.assert_allclose(pm, -pa, atol=2e-3 * np.abs(pa).max())
+    np.testing.assert_allclose(m.dataset.height.values[:, 3::-1], a.dataset.height.values[:, :4], atol=1e-3)
+
+
+def test_paper_mode_spreads_arrivals_aft_first(quick_runs):
+    p, d = quick_runs["paper"], quick_runs["decentralized"]
+    arr = p.dataset.arrival_time.values
+    assert np.all(np.isfinite(arr))
+    assert arr[0] < arr[-1]  # the lightly held stern arrives first
+    assert p.headline["arrival_spread_s"] > 10 * max(d.headline["arrival_spread_s"], 1.0)
+
+
+# ----------------------------------------------------------------------------- faults
+def test_every_fault_kind_runs_and_is_recorded(quick):
+    faults = [
+        {"kind": "sensor_drift", "bag": "bag_1", "time_s": 100.0, "rate_m_s": 0.005},
+        {"kind": "sensor_stuck", "bag": "bag_2", "time_s": 550.0},
+        {"kind": "sensor_dropout", "bag": "bag_3", "time_s": 520.0, "duration_s": 30.0},
+        {"kind": "supply_failure", "bag": "bag_4", "time_s": 600.0},
+        {"kind": "bag_rupture", "bag": "bag_6", "time_s": 650.0},
+        {"kind": "sling_break", "bag": "bag_5", "time_s": 660.0},
+    ]
+    sc = quick.with_changes(**{"faults": faults, "disturbance.force_noise_N_m": 500.0,
+                               "disturbance.current_m_s": 0.02, "simulation.duration_s": 800.0,
+                               "control.height_noise_m": 0.05})
+    r = simulate(sc)
+    kinds = {(e["kind"], e["bag"]) for e in r.events}
+    for f in faults:
+        assert (f["kind"], f["bag"]) in kinds
+    assert r.error == ""
+    assert r.dataset.time.values[-1] > 650.0
+    assert np.all(np.isfinite(r.dataset.height.values))
+
+
+def test_unknown_bag_in_fault_is_input_error(quick):
+    sc = quick.with_changes(**{"faults": [{"kind": "sling_break", "bag": "bag_99", "time_s": 1.0}]})
+    with pytest.raises(InputError, match="bag_99"):
+        simulate(sc)
+
+
+def test_numerics_failure_keeps_partial_results(quick, monkeypatch):
+    import flexlift.simulate as S
+
+    real = S.dynamics
+
+    def broken(t, x, u, params):
+        dx, aux = real(t, x, u, params)
+        return (dx * np.nan if t > 50.0 else dx), aux
+
+    monkeypatch.setattr(S, "dynamics", broken)
+    with pytest.raises(SimulationError, match="numerics failed") as err:
+        simulate(quick, duration=200.0)
+    part = err.value.partial
+    assert part is not None and 40.0 < part.dataset.time.values[-1] < 200.0
+    assert "numerics failed" in part.error
