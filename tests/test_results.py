@@ -1,0 +1,62 @@
+import json
+
+import numpy as np
+import pytest
+
+from flexlift.results import BAG_VARS, CRITERIA, HULL_VARS, load_netcdf, save_netcdf, to_csv
+from flexlift.scenario import load_scenario
+from flexlift.simulate import simulate
+
+
+@pytest.fixture(scope="module")
+def short():
+    sc = load_scenario("tanker").with_changes(**{"control.target_height_m": 20.0,
+                                                 "seabed.breakout_time_s": 60.0,
+                                                 "simulation.hold_time_s": 30.0})
+    return simulate(sc, duration=900.0)
+
+
+def test_dataset_has_named_dims_and_units(short):
+    ds = short.dataset
+    assert set(ds.height.dims) == {"time", "bag"}
+    assert set(ds.bending_moment.dims) == {"time_strength", "x"}
+    for name in list(BAG_VARS) + list(HULL_VARS) + ["moment_max", "shear_force"]:
+        assert ds[name].attrs["units"], name
+    assert list(ds.bag.values) == [f"bag_{k}" for k in range(1, 8)]
+    assert set(short.criteria) == set(CRITERIA)
+
+
+def test_strength_closes_at_the_bow(short):
+    """The dynamic load case is in equilibrium: V(L), M(L) small against the peaks."""
+    ds = short.dataset
+    V, M = ds.shear_force.values, ds.bending_moment.values
+    assert np.abs(V[:, -1]).max() < 0.02 * np.abs(V).max()
+    assert np.abs(M[:, -1]).max() < 0.02 * np.abs(M).max()
+
+
+def test_netcdf_round_trip(short, tmp_path):
+    path = save_netcdf(short, tmp_path / "r.nc")
+    back = load_netcdf(path)
+    for name in ("height", "bending_moment", "gas_volume", "arrival_time"):
+        np.testing.assert_array_equal(back.dataset[name].values, short.dataset[name].values)
+    assert back.events == short.events
+    assert back.criteria == short.criteria
+    assert back.summary() == short.summary()
+    assert back.dataset.height.attrs["units"] == "m"
+    assert list(back.dataset.bag_kind.values) == list(short.dataset.bag_kind.values)
+
+
+def test_csv(short, tmp_path):
+    paths = to_csv(short, tmp_path, prefix="x")
+    head = paths[0].read_text().splitlines()
+    assert head[0].startswith("time [s],heave [m]")
+    assert "height_bag_1 [m]" in head[0]
+    assert len(head) == short.dataset.time.size + 1
+    assert paths[1].read_text().startswith("x [m],moment_max [N m]")
+
+
+def test_summary_is_json(short):
+    s = short.summary()
+    json.dumps(s, allow_nan=False)
+    assert set(s["arrival_time_s"]) == set(s["final_height_m"]) == set(short.dataset.bag.values)
+    assert all(isinstance(v, bool) for v in s["criteria"].values())
