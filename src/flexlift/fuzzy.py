@@ -290,7 +290,8 @@ class FIS:
             a = a.reshape(-1, 1)
         else:
             raise InputError("inputs shape", a.shape, f"({m},) or (n, {m}) for this system")
-        if np.isnan(a).any():
+        total = a.sum()  # one cheap reduction; NaN (or inf - inf) only then look closer
+        if total != total and np.isnan(a).any():
             raise InputError("inputs", "NaN", "finite numbers (values beyond a range are saturated)")
         c = self._compiled
         return np.minimum(np.maximum(a, c.lo), c.hi), single
@@ -491,6 +492,8 @@ def _defuzz(agg: np.ndarray, y: np.ndarray, method: str, y1=None) -> np.ndarray:
         y1 = np.stack([y, np.ones_like(y)], axis=1)
     if method == "centroid":
         num, total = (agg @ y1).T
+        if total.min() > 0.0:  # the usual case: one check instead of a masked division
+            return num / total
         ok = total > 0.0
         u = num / np.where(ok, total, 1.0)
     elif method == "centroid_trapz":
