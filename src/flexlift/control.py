@@ -59,15 +59,14 @@ class SupervisorTable:
 
     def pair(self, e, r):
         top = self.grid - 1 - 1e-9
-        se = np.minimum(np.maximum((e + 1.0) / self.h, 0.0), top)
-        sr = np.minimum(np.maximum((r + 1.0) / self.h, 0.0), top)
-        a, b = se.astype(int), sr.astype(int)
-        fe, fr = se - a, sr - b
-        k = a * self.grid + b
+        sc = np.minimum(np.maximum((np.stack((e, r)) + 1.0) * (1.0 / self.h), 0.0), top)
+        i = sc.astype(np.intp)
+        f = sc - i
+        k = i[0] * self.grid + i[1]
         T = self.flat
-        lo = T[k] + fe * (T[k + self.grid] - T[k])
-        hi = T[k + 1] + fe * (T[k + self.grid + 1] - T[k + 1])
-        return lo + fr * (hi - lo)
+        c00, c10, c01, c11 = T[k], T[k + self.grid], T[k + 1], T[k + self.grid + 1]
+        lo = c00 + f[0] * (c10 - c00)
+        return lo + f[1] * (c01 + f[0] * (c11 - c01) - lo)
 
 
 class FillTable:
@@ -222,6 +221,11 @@ class Controller:
         self.active = np.ones(n, dtype=bool)  # False once a bag is lost (sling break)
         self.zeros = np.zeros(n)
         self.prof = None
+        self._lev = None
+        self._lost = False
+        self.n = n
+        self.started = False  # some bag has separated
+        self.open_loop = params.mode == "open-loop"
         self.V_hold = params.V_neutral + params.V_pull
         self.inv_e, self.inv_r, self.inv_T = 1 / params.e_scale, 1 / params.r_scale, 1 / params.period
         self.a_filt = params.period / (DERIV_TAU + params.period)
@@ -232,8 +236,13 @@ class Controller:
         )
 
     @property
-    def all_active(self) -> bool:
-        return bool(self.active.all())
+    def n_active(self) -> int:
+        return int(self.active.sum()) if self._lost else self.n
+
+    def lose(self, k: int) -> None:
+        """Bag k is lost (its sling broke): its controllers stop."""
+        self.active[k] = False
+        self._lost = True
 
     def reference(self, t: float):
         """(z_ref, ż_ref) per bag [m, m/s]; a bag not yet separated keeps its start height."""
@@ -243,21 +252,42 @@ class Controller:
             vp = np.minimum(p.speed, np.sqrt(D * p.accel))
             ta = vp / p.accel
             tc = np.where(vp > 0, (D - vp * ta) / np.where(vp > 0, vp, 1.0), 0.0)
-            self.prof = (np.sign(p.target - self.z0), D, vp, ta, ta + tc, 2 * ta + tc)
-        sgn, D, vp, ta, tb, T = self.prof
+            t0 = np.where(np.isnan(self.t_sep), np.inf, self.t_sep)
+            flat = None
+            if np.all(t0 == t0[0]) and np.all(vp == p.speed):
+                flat = (float(t0[0]), float(ta[0]), float(p.speed), float((ta + tc).min()))
+            self.prof = (np.sign(p.target - self.z0), D, vp, ta, ta + tc, 2 * ta + tc, t0, flat)
+        sgn, D, vp, ta, tb, T, t0, flat = self.prof
         a = self.p.accel
-        tau = np.maximum(np.nan_to_num(t - self.t_sep, nan=0.0), 0.0)
+        if flat is not None:  # one start time, cruise reached by every bag: scalar phases
+            t_start, ta_s, vp_s, tb_min = flat
+            tau = max(t - t_start, 0.0)
+            if tau < ta_s:
+                return self.z0 + sgn * (0.5 * a * tau * tau), sgn * (a * tau)
+            if tau < tb_min:
+                return self.z0 + sgn * (vp_s * (tau - 0.5 * ta_s)), sgn * vp_s
+        tau = np.maximum(t - t0, 0.0)
         r = np.maximum(T - tau, 0.0)
-        pos = np.where(tau < ta, 0.5 * a * tau * tau, np.where(tau < tb, vp * (tau - 0.5 * ta), D - 0.5 * a * r * r))
+        pos = np.where(tau < ta, (0.5 * a) * tau * tau,
+                       np.where(tau < tb, vp * (tau - 0.5 * ta), D - (0.5 * a) * r * r))
         vel = np.minimum(np.minimum(a * tau, vp), a * r)
         return self.z0 + sgn * pos, sgn * vel
+
+    def _levelling(self):
+        """Lever arms about the live bags' centre and 1 / sum of their squares (cached)."""
+        key = self.active.tobytes()
+        if self._lev is None or self._lev[0] != key:
+            live = self.active
+            xl = np.where(live, self.p.x - self.p.x[live].mean(), 0.0)
+            self._lev = (key, xl / float(xl @ xl))
+        return self._lev[1]
 
     def step(self, t: float, z, zdot, V, separated):
         """One control sample from measured heights [m], velocities [m/s] and gas volumes
         [m^3]; ``separated`` a bool (the hull) or one per bag (the paper's uncoupled bags).
         Returns (fill [m^3/s], purge opening [-], supervisor u [-], V_d [m^3], z_ref [m])."""
         p = self.p
-        if self.pending and np.any(separated):
+        if self.pending and (separated is True or (separated is not False and np.any(separated))):
             new = np.asarray(separated, dtype=bool) & np.isnan(self.t_sep)
             self.t_sep = np.where(new, t, self.t_sep)
             live = self.active
@@ -267,7 +297,8 @@ class Controller:
                 self.z0 = np.where(new, z, self.z0)
             self.prof = None
             self.pending = bool(np.isnan(self.t_sep).any())
-        if p.mode == "open-loop" or np.isnan(self.t_sep[0]) and self.pending and np.isnan(self.t_sep).all():
+            self.started = True
+        if self.open_loop or not self.started:
             V_d = self.V_hold
             u = self.zeros
             z_ref = self.zeros
@@ -279,32 +310,29 @@ class Controller:
                 pre = np.isnan(self.t_sep)
                 V_d = np.where(pre, self.V_hold, V_d)
                 u = np.where(pre, 0.0, u)
-        if self.coordinated and self.active.sum() > 1:
-            live = self.active
-            xl = p.x[live] - p.x[live].mean()
-            den = float(xl @ xl)
-            theta = float(xl @ z[live]) / den
-            theta_d = float(xl @ zdot[live]) / den
-            V_d = V_d - (p.k_pitch * theta + p.k_pitch_rate * theta_d) * p.lever
+        if self.coordinated and self.n_active > 1:
+            w = self._levelling()
+            V_d = V_d - (p.k_pitch * float(w @ z) + p.k_pitch_rate * float(w @ zdot)) * p.lever
         eps = V_d - V
         if self.prev_eps is None:
             self.prev_eps = eps
-        self.eps_rate = self.eps_rate + self.a_filt * ((eps - self.prev_eps) * self.inv_T - self.eps_rate)
+        self.eps_rate += self.a_filt * ((eps - self.prev_eps) * self.inv_T - self.eps_rate)
         self.prev_eps = eps
         d = (self.eps_rate + p.lam * eps) * self.d_gain
-        fill = self.fill(np.minimum(np.maximum(d, -1.0), 1.0)) * (eps > p.deadband) * p.fill_max
-        excess = -eps
-        if p.mode == "open-loop":
+        fill = self.fill(np.minimum(np.maximum(d, -1.0), 1.0)) * ((eps > p.deadband) * p.fill_max)
+        if self.open_loop:
             opening = self.zeros
         else:
+            excess = -eps
             raw = p.kp * excess + p.ki * self.integ
             if p.kd:
                 raw = raw + p.kd * (excess - self.prev_excess) * self.inv_T
-            hold = ((raw >= 1.0) & (excess > 0)) | ((raw <= 0.0) & (excess < 0))
-            self.integ = np.maximum(self.integ + excess * p.period * ~hold, 0.0)
+                self.prev_excess = excess
+            # anti-windup: no integration while the valve is saturated open by the excess
+            hold = (raw >= 1.0) & (excess > 0)
+            self.integ = np.maximum(self.integ + np.where(hold, 0.0, excess * p.period), 0.0)
             opening = np.minimum(np.maximum(raw, 0.0), 1.0) * (excess > p.deadband)
-        self.prev_excess = excess
-        if not self.all_active:
+        if self.n_active < self.n:
             fill = fill * self.active
             opening = opening * self.active
         return fill, opening, u, V_d, z_ref

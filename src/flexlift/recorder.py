@@ -61,6 +61,14 @@ class Recorder:
         fdt = aux.fill * self.dt
         self.gas_local += fdt
         self.gas_free += fdt * aux.pressure * self.inv_patm
+        if not sw.separated:
+            self.last = (t, x, aux, u, cmd, ext, sw.separated, sw.attached)
+            if k % self.k_out == 0:
+                self._store()
+                self.stored_t = t
+            if k % self.k_str == 0:
+                self._snapshot(t, x, aux, sw)
+            return
         v = float(np.abs(aux.zdot * sw.attached).max())
         pitch = abs(float(x[1]) * P.pitch_slope)
         if v > self.vmax:

@@ -110,6 +110,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     x = P.initial_state()
     u = np.zeros(2 * nb)
     F = Fast(P)
+    x[:nr] = held_state(F, x, sw)
     params = (P, sw, F)
     sw.noisy = dist.force_noise_N_m > 0
     M_free = step_matrix(P, dt, None)
@@ -121,6 +122,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     hold_time = sim.hold_time_s
     hold_since = None
     top_limit = env.water_depth_m - lim.surface_clearance_m - P.top_offset
+    top_min = float(top_limit.min())
     error = None
     m2 = 2 * nr
     nsl = slice(m2, m2 + nb)
@@ -128,19 +130,22 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     relief = np.where(closed, P.gas.relief, 0.0)
     report_every = max(1, n_steps // 100)
     any_sensor_fault = False
+    leaking = False
+    n_faults = len(faults)
     t = 0.0
     for k in range(n_steps + 1):
         t = k * dt
-        while fi < len(faults) and faults[fi].time_s <= t + 1e-12:
+        while fi < n_faults and faults[fi].time_s <= t + 1e-12:
             f = faults[fi]
             i = name_idx[f.bag]
             detail = ""
             if f.kind == "bag_rupture":
                 sw.leak[i] = 1.0 / f.leak_time_s
+                leaking = True
             elif f.kind == "sling_break":
                 sw.attached[i] = 0.0
                 if i in ctrl_idx:
-                    ctrl.active[ctrl_idx[i]] = False
+                    ctrl.lose(ctrl_idx[i])
             elif f.kind == "supply_failure":
                 sw.supply[i] = 0.0
             elif f.kind == "sensor_drift":
@@ -158,8 +163,6 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
         if sw.noisy:
             noise_el = ou_a * noise_el + ou_b * rng.standard_normal(noise_el.size)
             sw.noise_s = np.repeat(noise_el, strips_per_el)
-        if not sw.separated:
-            x[:nr] = held_state(F, x, sw)
         if k % k_ctrl == 0:
             # measurements: what the controllers see
             q = x[:nr]
@@ -183,27 +186,34 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             u[nb + ext] = cmd[1]
         sw.full = k % rec.k_out == 0 or k % rec.k_str == 0
         dx, aux = dynamics(t, x, u, params)
+        if not sw.separated:  # held: the hull sits in quasi-static equilibrium on the seabed
+            Qh = F.Gb @ aux.point + F.Qw
+            x[:nr] = F.static @ (Qh + F.G @ sw.noise_s if sw.noisy else Qh)
         rec.sample(k, t, x, aux, u, cmd, ext, sw)
         # events on the current state
         if not sw.separated and aux.uplift > x[-1]:
             sw.separated = True
             rec.event(t, "separation", None, f"uplift {aux.uplift / (C.TONNE * g):.0f} t")
-        if (aux.z > top_limit).any():
+        zmax = aux.z.max()
+        if zmax > top_min:
             live = (aux.z > top_limit) & (sw.attached > 0)
             if live.any():
                 rec.event(t, "surface_breach", P.names[int(np.argmax(live))], "the run ends at the surface")
                 break
         if sw.separated:
-            within = np.abs(aux.z - target) <= tol
-            if not rec.all_arrived:
-                rec.arrivals(t, within)
-            if within.all() or (within | (sw.attached == 0)).all():
-                hold_since = t if hold_since is None else hold_since
-                if t - hold_since >= hold_time - 1e-9:
-                    rec.event(t, "target_held", None, f"held {hold_time:.0f} s")
-                    break
-            else:
+            if zmax < target - tol:  # no bag near the target yet
                 hold_since = None
+            else:
+                within = np.abs(aux.z - target) <= tol
+                if not rec.all_arrived:
+                    rec.arrivals(t, within)
+                if within.all() or (within | (sw.attached == 0)).all():
+                    hold_since = t if hold_since is None else hold_since
+                    if t - hold_since >= hold_time - 1e-9:
+                        rec.event(t, "target_held", None, f"held {hold_time:.0f} s")
+                        break
+                else:
+                    hold_since = None
         if k == n_steps:
             break
         # step: linearly implicit trapezoidal rule on the mechanics, explicit on the rest
@@ -218,13 +228,13 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
         # spill (open bags) and relief venting (closed bags) at the local pressure
         n_max = (aux.pressure + relief) * P.capacity * (1.0 / F.RT)
         over = x[nsl] - n_max
-        if (over > 0).any():
+        if over.max() > 0.0:
             over = np.maximum(over, 0.0)
             rec.vent(over * F.RT / aux.pressure)
             x[nsl] -= over
         if x[-1] < 0.0:
             x[-1] = 0.0
-        if sw.leak.any():
+        if leaking:
             x[nsl] = np.maximum(x[nsl], 0.0)
         if sw.separated and x[-1] < 1e-3 * H0 and not rec.has("breakout"):
             rec.event(t + dt, "breakout", None, "holding force below 0.1 % of H0")
