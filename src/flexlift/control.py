@@ -329,9 +329,13 @@ class Controller:
                 raw = raw + p.kd * (excess - self.prev_excess) * self.inv_T
                 self.prev_excess = excess
             # anti-windup: no integration while the valve is saturated open by the excess
-            hold = (raw >= 1.0) & (excess > 0)
+            # the purge PID starts beyond the deadband and keeps authority while its integral
+            # is positive (a steady opening against the expansion during the ascent)
+            on = (excess > p.deadband) | (self.integ > 0.0)
+            hold = ((raw >= 1.0) & (excess > 0)) | ~on
             self.integ = np.maximum(self.integ + np.where(hold, 0.0, excess * p.period), 0.0)
-            opening = np.minimum(np.maximum(raw, 0.0), 1.0) * (excess > p.deadband)
+            opening = np.minimum(np.maximum(raw, 0.0), 1.0) * on
+            fill = fill * (opening <= 0.0)
         if self.n_active < self.n:
             fill = fill * self.active
             opening = opening * self.active
