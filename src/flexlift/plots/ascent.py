@@ -33,7 +33,7 @@ def bag_histories(result):
             ax.plot(t, ds[name].values[:, k] * scale, ls, lw=1.0, label=str(b))
         ax.set_ylabel(label)
         _event_lines(ax, result)
-    axes[0].legend(ncol=4, loc="lower right")
+    axes[0].legend(ncol=4, loc="upper left")
     axes[-1].set_xlabel("time [min]")
     axes[0].set_title(f"Bag histories, {result.control} control (dotted: separation, breakout)")
     return fig
