@@ -126,9 +126,8 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         if warnings:
             text += f"; {len(warnings)} warning(s)"
         verdict = f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.</div>'
-    nav = "".join(
-        f'<li><a href="#{s.name}">{_e(STAGE_TITLES.get(s.name, s.name))}</a></li>' for s in stages
-    )
+    bases = dict.fromkeys("simulate" if s.name == "compare" else s.name.split(":")[0] for s in stages)
+    nav = "".join(f'<li><a href="#{b}">{_e(STAGE_TITLES.get(b, b))}</a></li>' for b in bases)
     parts = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>flexlift report: {_e(scenario.name)}</title><style>{_CSS}</style></head><body>",
@@ -147,13 +146,24 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         parts += ['<h2 id="warnings">Warnings</h2>'] + [
             f'<div class="warn"><b>{_e(name)}:</b> {_e(w)}</div>' for name, w in warnings
         ]
+    seen: set[str] = set()
     for s in stages:
-        parts.append(f'<h2 id="{_e(s.name)}">{_e(STAGE_TITLES.get(s.name, s.name))}</h2>')
+        base, _, variant = s.name.partition(":")
+        base = "simulate" if base == "compare" else base
+        if base not in seen:
+            seen.add(base)
+            parts.append(f'<h2 id="{_e(base)}">{_e(STAGE_TITLES.get(base, base))}</h2>')
+        if variant:
+            parts.append(f'<h3 id="{_e(s.name)}">{_e(variant)} control</h3>')
+        elif s.name == "compare":
+            parts.append('<h3 id="compare">Control modes compared</h3>')
         lead = s.summary.get("conclusion") if isinstance(s.summary, dict) else None
         if lead:
             parts.append(f"<p>{_e(lead)}</p>")
         if s.warnings:
             parts.append(f'<p class="meta">{len(s.warnings)} warning(s): see <a href="#warnings">Warnings</a>.</p>')
+        if s.criteria:
+            parts.append(_criteria(s.criteria))
         parts += [_table(t) for t in s.tables]
         parts += [_figure(f) for f in s.figures]
     parts.append("</body></html>")
