@@ -28,6 +28,7 @@ def test_simulate_writes_files(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "criteria:" in text
     assert (out / "data" / "simulate_decentralized.nc").is_file()
+    assert (out / "results.nc").is_file()
     assert (out / "tables" / "simulate_decentralized_time_histories.csv").is_file()
     for f in ("bags", "hull", "moment"):
         assert (out / "figures" / f"simulate_decentralized_{f}.png").stat().st_size > 1000

@@ -40,12 +40,14 @@ def add_parser(sub) -> None:
     p.set_defaults(func=_main)
 
 
-def _write(result, out: Path, mode: str) -> list[Figure]:
+def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
     from flexlift.plots import ascent
     from flexlift.plots._style import save
     from flexlift.results import save_netcdf, to_csv
 
     save_netcdf(result, out / "data" / f"simulate_{mode}.nc")
+    if primary:
+        save_netcdf(result, out / "results.nc")
     to_csv(result, out / "tables", prefix=f"simulate_{mode}")
     figs = []
     fd = out / "figures"
@@ -60,9 +62,12 @@ def _write(result, out: Path, mode: str) -> list[Figure]:
 
 
 def run_stage(scenario, out: Path | None, control: str | None = None,
-              duration: float | None = None, progress=None, engine="table") -> StageOutput:
-    """Simulate one control mode; write netCDF, CSV and figures under ``out`` when given.
-    A numerics failure still writes the partial results and is reported in the summary."""
+              duration: float | None = None, progress=None, engine="table",
+              primary: bool | None = None) -> StageOutput:
+    """Simulate one control mode; write netCDF (``data/simulate_<mode>.nc``, and
+    ``results.nc`` for the scenario's own control mode or when ``primary``), CSV tables and
+    figures under ``out`` when given. A numerics failure still writes the partial results and
+    is reported in the summary and warnings."""
     from flexlift.simulate import simulate
 
     mode = control or scenario.control.mode
@@ -74,7 +79,9 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
         warnings.append(str(exc))
         if result is None:
             raise
-    figures = _write(result, Path(out), mode) if out is not None else []
+    if primary is None:
+        primary = mode == scenario.control.mode
+    figures = _write(result, Path(out), mode, primary) if out is not None else []
     summary = result.summary()
     rows = [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")] for e in result.events]
     tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"], rows)]
@@ -109,7 +116,7 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
 def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
     check_out_dir(args.out)
-    out = run_stage(scenario, args.out, control=args.control, duration=args.duration)
+    out = run_stage(scenario, args.out, control=args.control, duration=args.duration, primary=True)
     s = out.summary
     if args.json:
         emit_json(s)
