@@ -71,6 +71,11 @@ def add_parser(sub) -> None:
         f"(default: {','.join(DEFAULT_CONTROLS)})",
     )
     p.add_argument("--quiet", action="store_true", help="no progress on the terminal")
+    p.add_argument(
+        "--strict",
+        action="store_true",
+        help="exit with code 1 when any acceptance criterion fails (default: 0, verdict in the report)",
+    )
     p.add_argument("--json", action="store_true", help="print summary.json on stdout")
     p.set_defaults(func=_main)
 
@@ -128,6 +133,7 @@ def run_all(
                         out,
                         control=mode,
                         progress=lambda f, m=mode: progress.bar(f, m),
+                        primary=mode == controls[0],  # its dataset is results.nc
                     )
                 )
             if len(controls) > 1:
@@ -183,4 +189,4 @@ def _main(args: argparse.Namespace) -> int:
             f"done in {summary['elapsed_s']:.1f} s: {status[verdict]}, "
             f"{len(summary['warnings'])} warning(s)\nreport: {out / 'report.html'}\n"
         )
-    return 0
+    return 1 if args.strict and summary["all_criteria_passed"] is False else 0
