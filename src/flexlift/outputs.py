@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import io
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,6 +24,14 @@ class Table:
     columns: list[str]
     rows: list[list]
     note: str = ""
+
+    def to_csv(self) -> str:
+        """The table as CSV text: a header of the column names, then the rows (None -> empty)."""
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(self.columns)
+        w.writerows(["" if v is None else v for v in row] for row in self.rows)
+        return buf.getvalue()
 
 
 @dataclass(frozen=True)

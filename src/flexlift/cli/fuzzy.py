@@ -16,8 +16,6 @@ scenario's ``control.supervisor`` section; ``--fis FILE`` loads a MATLAB ``.fis`
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import math
 import sys
 from pathlib import Path
@@ -125,13 +123,6 @@ def _sets_table(fis: FIS) -> Table:
                  ["variable", "set", "type", "parameters"], rows)
 
 
-def _csv(table: Table) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(table.columns)
-    w.writerows(table.rows)
-    return buf.getvalue()
-
 
 def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = None,
               grid: int = SURFACE_GRID) -> StageOutput:
@@ -212,8 +203,8 @@ def _write(out: Path, fis: FIS, tables: list[Table], builtin: bool) -> list[Figu
         figures.append(Figure(save(plot_map(d, fill(d)), fdir / "fuzzy_fill_map.png"),
                               "SIFSMC fill map: signed distance d to the fill fraction of "
                               "Q_in,max (zero for d <= 0)."))
-    write_text(tdir / "fuzzy_rules.csv", _csv(tables[0]))
-    write_text(tdir / "fuzzy_sets.csv", _csv(tables[1]))
+    write_text(tdir / "fuzzy_rules.csv", tables[0].to_csv())
+    write_text(tdir / "fuzzy_sets.csv", tables[1].to_csv())
     write_text(out / "fuzzy_supervisor.fis", to_fis_text(fis))
     return figures
 

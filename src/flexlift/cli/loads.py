@@ -6,8 +6,6 @@ JSON values are in tonnes, metres, MN and MN m; nodes are numbered 1.. from the 
 
 from __future__ import annotations
 
-import csv
-import io
 import logging
 import sys
 from pathlib import Path
@@ -133,13 +131,6 @@ def _tables(summary: dict) -> list[Table]:
     return [bags, st]
 
 
-def _csv(table: Table) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(table.columns)
-    w.writerows(["" if v is None else v for v in row] for row in table.rows)
-    return buf.getvalue()
-
 
 def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> StageOutput:
     """Lift plan and strength of ``scenario``; figures and CSV tables under ``out`` when given.
@@ -181,8 +172,8 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
                 "maxima marked, sagging positive.",
             )
         )
-        write_text(tdir / "loads_bags.csv", _csv(tables[0]))
-        write_text(tdir / "loads_strength.csv", _csv(tables[1]))
+        write_text(tdir / "loads_bags.csv", tables[0].to_csv())
+        write_text(tdir / "loads_strength.csv", tables[1].to_csv())
     return StageOutput(
         name=NAME, summary=summary, figures=figures, tables=tables, warnings=list(plan.warnings)
     )

@@ -7,8 +7,6 @@ flexible modes. Nodes are numbered 1..N+1 from the aft end. Frequencies are dry,
 
 from __future__ import annotations
 
-import csv
-import io
 import sys
 from pathlib import Path
 
@@ -137,13 +135,6 @@ def _tables(summary: dict, modes: Modes) -> list[Table]:
     return tables
 
 
-def _csv(table: Table) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(table.columns)
-    w.writerows(["" if v is None else v for v in row] for row in table.rows)
-    return buf.getvalue()
-
 
 def run_stage(
     scenario,
@@ -205,9 +196,9 @@ def run_stage(
                 f"Relative error of the first flexible frequencies against element count "
                 f"(reference: {conv.reference}); Hermite cubics converge as h^4.",
             ))
-        write_text(tdir / "modes_frequencies.csv", _csv(tables[0]))
+        write_text(tdir / "modes_frequencies.csv", tables[0].to_csv())
         if conv is not None:
-            write_text(tdir / "modes_convergence.csv", _csv(tables[1]))
+            write_text(tdir / "modes_convergence.csv", tables[1].to_csv())
     return StageOutput(name=NAME, summary=summary, figures=figures, tables=tables,
                        criteria=criteria)
 

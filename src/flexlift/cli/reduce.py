@@ -11,8 +11,6 @@ mode numbers are 1-based (1 = heave, 2 = pitch).
 
 from __future__ import annotations
 
-import csv
-import io
 import logging
 import sys
 from pathlib import Path
@@ -138,13 +136,6 @@ def bag_summary(scenario, modes, bag, order: int, output: str | None = None, bag
     return summary, models, cmp, gains
 
 
-def _csv(table: Table) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(table.columns)
-    w.writerows(["" if v is None else v for v in row] for row in table.rows)
-    return buf.getvalue()
-
 
 def _mdc_exact(s: dict) -> bool:
     ref = s["flexible_static_gain_m_per_N"]
@@ -221,8 +212,8 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
             save(plot_time(models, t, f"Time responses, {what}"), fdir / "reduce_time.png"),
             f"Step and impulse responses of the full and reduced models, {what}; right: with "
             "the rigid-body motion subtracted, leaving the flexible response."))
-        write_text(tdir / "reduce_comparison.csv", _csv(table))
-        write_text(tdir / "reduce_gains.csv", _csv(gains_table))
+        write_text(tdir / "reduce_comparison.csv", table.to_csv())
+        write_text(tdir / "reduce_gains.csv", gains_table.to_csv())
     criteria = {"mdc_static_gain_exact": all(_mdc_exact(s) for s in per_bag.values())}
     return StageOutput(name=NAME, summary=summary, figures=figures, tables=[table, gains_table],
                        criteria=criteria)
