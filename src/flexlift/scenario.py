@@ -411,10 +411,11 @@ def _format_error(err: dict, source: str) -> str:
             model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else model
         valid = ", ".join(model.model_fields)
         return f"{source}: unknown key '{loc}'; valid keys here are: {valid}"
-    value = err.get("input")
-    shown = repr(value) if not isinstance(value, dict) else "{...}"
     msg = err["msg"].removeprefix("Value error, ")
-    return f"{source}: {loc or 'scenario'} = {shown}: {msg}"
+    value = err.get("input")
+    if isinstance(value, dict):  # a check across a whole section: its message names the fields
+        return f"{source}: {loc + ': ' if loc else ''}{msg}"
+    return f"{source}: {loc or 'scenario'} = {value!r}: {msg}"
 
 
 def parse_scenario(data, source: str = "scenario") -> Scenario:
