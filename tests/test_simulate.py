@@ -97,18 +97,18 @@ def test_neutral_hull_at_rest_stays_at_rest():
 
 
 def test_halving_the_time_step(quick_runs, quick):
+    """Every headline quantity moves by less than 1 % when the step is halved (the controllers
+    sample at 10 Hz in both runs; events are located inside the step)."""
     a = quick_runs["decentralized"].headline
     half = simulate(quick.with_changes(**{"simulation.time_step_s": 0.05}))
     b = half.headline
-    for key in ("separation_time_s", "breakout_time_s", "max_ascent_velocity_ms",
-                "max_bending_moment_MNm"):
+    for key in ("separation_time_s", "breakout_time_s", "max_ascent_velocity_ms", "max_pitch_deg",
+                "max_bending_moment_MNm", "gas_used_local_m3", "gas_used_free_air_m3"):
         assert b[key] == pytest.approx(a[key], rel=0.01), key
     ta = quick_runs["decentralized"].dataset.arrival_time.values
     tb = half.dataset.arrival_time.values
+    assert np.all(np.isfinite(ta))
     np.testing.assert_allclose(tb, ta, rtol=0.01)
-    # integrals of on/off valve commands are more sensitive: within 3 %
-    for key in ("gas_used_local_m3", "max_pitch_deg"):
-        assert b[key] == pytest.approx(a[key], rel=0.03), key
 
 
 def test_mirror_symmetry(quick):

@@ -244,6 +244,7 @@ class Aux:
     accel: np.ndarray  # (nr,) modal accelerations
     line: np.ndarray  # (ns,) line load at the strips except weight [N/m]
     point: np.ndarray  # (nb,) forces at the bags' points incl. bag drag [N]
+    Qext: np.ndarray | None = None  # (nr,) generalised force without stiffness, damping, contact
 
 
 class Fast:
@@ -296,15 +297,15 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
         qc = qc * active
     else:
         active = None
-    line = qc - F.drag * np.abs(vr) * vr
-    if sw.noisy:
-        line = line + sw.noise_s
     vb = zd - sw.current if sw.current else zd
     F_pt = F_bag - F.drag_bag * np.abs(vb) * vb * sw.attached
-    Q = F.G @ line + F.Gb @ F_pt + F.Qw
+    ext = -F.drag * np.abs(vr) * vr
+    if sw.noisy:
+        ext = ext + sw.noise_s
+    Qext = F.G @ ext + F.Gb @ F_pt + F.Qw
     if sw.separated:
-        Q = Q - H * F.Qhold
-    acc = Q - F.om2 * q - F.damp * v
+        Qext = Qext - H * F.Qhold
+    acc = Qext + F.G @ qc - F.om2 * q - F.damp * v
     fill = u[:nb] * sw.supply
     purge = F.purge_max * u[nb:] * np.sqrt(V * F.inv_cap)
     ndot = p * (fill - purge) * (1.0 / F.RT) - sw.leak * n
@@ -314,7 +315,7 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
     else:
         Hdot = -(F.H0 / F.Tb) * min(U / F.H0, 1.0) if U > 0 else 0.0
     dx = np.concatenate([v, acc, ndot, [Hdot]])
-    return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, line, F_pt)
+    return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, ext + qc, F_pt, Qext)
 
 
 def _held_rates(F: Fast, sw, q, n, u):
@@ -353,6 +354,15 @@ def held_state(F: Fast, x: np.ndarray, sw) -> np.ndarray:
     return q
 
 
+def uplift(F: Fast, x: np.ndarray, sw) -> float:
+    """U = sum of the bags' lift - W' at the state ``x`` [N]."""
+    nr, nb = F.nr, F.nb
+    z = F.pp @ x[:nr]
+    p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
+    V = np.minimum(x[2 * nr : 2 * nr + nb] * (F.RT / p), F.cap)
+    return float(F.rg * (V @ sw.attached)) - F.W
+
+
 def observe(P: Plant, x: np.ndarray):
     """Bag-point heights [m], velocities [m/s] and gas volumes [m^3] of state ``x``."""
     nr, nb = P.nr, P.nb
@@ -361,6 +371,34 @@ def observe(P: Plant, x: np.ndarray):
     p = P.gas.pressure(z)
     V = np.minimum(x[2 * nr : 2 * nr + nb] * P.gas.RT / p, P.capacity)
     return z, pp @ x[nr : 2 * nr], V
+
+
+def etd_matrices(P: Plant, dt: float, active: np.ndarray | None):
+    """Exact step of the linear mechanics over ``dt`` [s] under a generalised force that varies
+    linearly over the step (second-order exponential time differencing, ETD2):
+    y(t + dt) = E y + Phi1 b + Phi2 (b - b_prev), y = [q, q'] and b the generalised force
+    without modal stiffness, damping and the contact springs active at the strips ``active``
+    (None: none), b_prev its value one step earlier. Returns (E, Phi1 + Phi2, -Phi2), from one
+    matrix exponential of the augmented system (valid with the singular rigid-body modes)."""
+    from scipy.linalg import expm
+
+    nr = P.nr
+    K = np.diag(P.omega2[:nr])
+    Cm = np.diag(P.damp[:nr])
+    if active is not None and np.any(active):
+        ps = P.psi_s[:, :nr] * (P.ws * active)[:, None]
+        K = K + P.seabed.stiffness * ps.T @ P.psi_s[:, :nr]
+        Cm = Cm + P.seabed.damping * ps.T @ P.psi_s[:, :nr]
+    n = 2 * nr
+    A = np.zeros((n + 2 * nr, n + 2 * nr))
+    A[:nr, nr:n] = np.eye(nr)
+    A[nr:n, :nr] = -K
+    A[nr:n, nr:n] = -Cm
+    A[nr:n, n : n + nr] = np.eye(nr)  # b(tau) = b + (tau / dt) d drives the accelerations
+    A[n : n + nr, n + nr :] = np.eye(nr) / dt
+    X = expm(dt * A)
+    E, P1, P2 = X[:n, :n], X[:n, n : n + nr], X[:n, n + nr :]
+    return np.ascontiguousarray(E), np.ascontiguousarray(P1 + P2), np.ascontiguousarray(-P2)
 
 
 def step_matrix(P: Plant, dt: float, active: np.ndarray | None) -> np.ndarray:

@@ -41,12 +41,29 @@ class Recorder:
     def has(self, kind: str) -> bool:
         return kind in self.kinds
 
-    def arrivals(self, t: float, within: np.ndarray) -> None:
+    def arrivals(self, t: float, within: np.ndarray, z_prev=None, z=None, lo=None, hi=None,
+                 dt: float = 0.0) -> None:
+        """Record the first arrival of the bags ``within`` tolerance at time ``t`` [s]; with the
+        heights of the previous step ``z_prev`` and this one ``z`` [m], the time is interpolated
+        to the crossing of the band [lo, hi] [m] inside the step."""
         new = within & np.isnan(self.arrival)
         if new.any():
             for i in np.flatnonzero(new):
-                self.arrival[i] = t
-                self.event(t, "arrival", self.P.names[i])
+                ta = t
+                if z_prev is not None:
+                    a, b = float(z_prev[i]), float(z[i])
+                    edge = lo if a < lo else (hi if a > hi else None)
+                    if edge is not None and a != b:
+                        ta = t - dt + dt * min(max((edge - a) / (b - a), 0.0), 1.0)
+                self.arrival[i] = ta
+                self.event(ta, "arrival", self.P.names[i])
+
+    def account(self, aux, dt: float) -> None:
+        """Gas filled over a step of ``dt`` [s] with the fill flows of ``aux`` (the flows the
+        state integrates: at local pressure and as free air)."""
+        fdt = aux.fill * dt
+        self.gas_local += fdt
+        self.gas_free += fdt * aux.pressure * self.inv_patm
 
     def vent(self, volume_local: np.ndarray) -> None:
         self.vented += volume_local
@@ -58,9 +75,6 @@ class Recorder:
 
     def sample(self, k, t, x, aux, u, cmd, ext, sw) -> None:
         P = self.P
-        fdt = aux.fill * self.dt
-        self.gas_local += fdt
-        self.gas_free += fdt * aux.pressure * self.inv_patm
         if not sw.separated:
             self.last = (t, x, aux, u, cmd, ext, sw.separated, sw.attached)
             if k % self.k_out == 0:
