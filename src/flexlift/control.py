@@ -282,6 +282,13 @@ class Controller:
             self._lev = (key, xl / float(xl @ xl))
         return self._lev[1]
 
+    def idle(self, deadband: float) -> bool:
+        """True if the last sample left every valve shut and the next samples keep them shut
+        while the measurements stay the same (before separation: the desired volume is fixed)."""
+        if self.started or self.prev_eps is None or self.integ.any():
+            return False
+        return bool(np.all(np.abs(self.prev_eps) <= deadband))
+
     def step(self, t: float, z, zdot, V, separated):
         """One control sample from measured heights [m], velocities [m/s] and gas volumes
         [m^3]; ``separated`` a bool (the hull) or one per bag (the paper's uncoupled bags).

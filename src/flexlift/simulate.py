@@ -162,7 +162,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     tau = P.seabed.release_time
     decay = math.exp(-dt / tau)
     b_prev = None  # generalised force of the previous step (ETD2)
-    Hdot_prev = None  # held: rate of the holding force one step earlier
+    Hdot_prev = Hdot_last = None  # held: rate of the holding force one step earlier
     z_prev = None
     rec = Recorder(P, scenario, mode, dt)
     last = (np.zeros(nb), np.zeros(nb), np.zeros(nb))
@@ -183,8 +183,22 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     leaking = False
     n_faults = len(faults)
     t = 0.0
+    idle_until = -1  # held and idle up to this step: only the holding force changes
+    idle_dH = 0.0
+    idle_decay = 1.0 - ctrl.a_filt
     for k in range(n_steps + 1):
         t = k * dt
+        if k < idle_until:
+            # held and idle (valves shut and staying shut, no faults or noise): the gas and the
+            # hull's static state are constant, the holding force falls linearly
+            if k % k_ctrl == 0:
+                ctrl.eps_rate *= idle_decay  # the controller's filtered deficit rate decays
+            if k % rec.k_out == 0 or k % rec.k_str == 0:
+                sw.full = True
+                _, aux = dynamics(t, x, u, params)
+                rec.sample(k, t, x, aux, u, cmd, ext, sw)
+            x[-1] += idle_dH
+            continue
         while fi < n_faults and faults[fi].time_s <= t + 1e-12:
             f = faults[fi]
             i = name_idx[f.bag]
@@ -287,7 +301,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             Hdot = dx[-1]  # held: the holding force decays at a rate set by the pull (AB2)
             if Hdot_prev is not None:
                 step[-1] = dt * (1.5 * Hdot - 0.5 * Hdot_prev)
-            Hdot_prev = Hdot
+            Hdot_last, Hdot_prev = Hdot_prev, Hdot
         x += step
         rec.account(aux, dt)
         # spill (open bags) and relief venting (closed bags) at the local pressure
@@ -316,6 +330,15 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
                     dx_s, aux_s = dynamics(t + dt, x, u, params)
                     x[:] = _substeps(x, t + dt - rest, rest, CONTACT_SUBSTEPS, dx_s, aux_s, None, u,
                                      params, tau, False)
+            elif (k % k_ctrl == 0 and not (sw.noisy or noisy or leaking or any_sensor_fault)
+                  and Hdot == Hdot_last and ctrl.idle(cp.deadband)):
+                # idle from here: skip to a few steps before the separation or the next fault
+                n_sep = (x[-1] - aux.uplift) / (-dt * Hdot) if Hdot < 0.0 else math.inf
+                k_end = min(n_steps, k + 1 + int(min(n_sep, 1e9)) - 2)
+                if fi < n_faults:
+                    k_end = min(k_end, int(math.ceil(faults[fi].time_s / dt - 1e-9)) - 1)
+                if k_end > k + 1 and aux.uplift == uplift(F, x, sw):
+                    idle_until, idle_dH = k_end, dt * Hdot
         if leaking:
             x[nsl] = np.maximum(x[nsl], 0.0)
         if sw.separated and x[-1] < 1e-3 * H0 and not rec.has("breakout"):
