@@ -42,7 +42,7 @@ figcaption { font-size: .85rem; color: #4a5568; }
 .verdict.bad { background: #fdecea; border: 1px solid #b42318; }
 .warn { background: #fff7e0; border-left: 4px solid #d69e2e; padding: .4rem .8rem; margin: .5rem 0; }
 .meta { font-size: .85rem; color: #4a5568; }
-nav ol { columns: 2; font-size: .9rem; }
+nav ul { columns: 2; font-size: .9rem; list-style: none; padding-left: 0; }
 @media print { body { max-width: none; margin: 0; } h2 { page-break-before: auto; }
                a { color: inherit; text-decoration: none; } }
 """
@@ -113,19 +113,42 @@ def _particulars(scenario) -> str:
 def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
     """The whole report as one HTML page (figures embedded as base64 PNG)."""
     generated = generated or datetime.now(UTC)
-    criteria = {f"{s.name}: {k}": v for s in stages for k, v in s.criteria.items()}
+    # lift criteria (SPEC §7) decide the verdict; the other stages' checks are numerical
+    # self-checks of the analysis, shown apart but counted too
+    lift = {
+        f"{s.name.split(':', 1)[1]}: {k}": v
+        for s in stages
+        if s.name.startswith("simulate:")
+        for k, v in s.criteria.items()
+    }
+    checks = {
+        f"{s.name}: {k}": v
+        for s in stages
+        if not s.name.startswith("simulate:")
+        for k, v in s.criteria.items()
+    }
     warnings = [(s.name, w) for s in stages for w in s.warnings]
-    ok = all(criteria.values()) and not warnings
-    if not criteria:
-        verdict = '<div class="verdict bad">No acceptance criteria were evaluated (the ascent was not simulated).</div>'
-    elif ok:
-        verdict = '<div class="verdict ok"><b>Lift plan acceptable:</b> every criterion passed and no warnings.</div>'
+    failed = [k for k, v in {**lift, **checks}.items() if not v]
+    if not lift:
+        verdict = (
+            '<div class="verdict bad">The ascent was not simulated, so the lift criteria '
+            "were not evaluated.</div>"
+        )
+    elif not failed and not warnings:
+        verdict = (
+            '<div class="verdict ok"><b>Lift plan acceptable:</b> every lift criterion passed '
+            "in every control mode simulated, every numerical check passed, no warnings.</div>"
+        )
     else:
-        failed = [k for k, v in criteria.items() if not v]
-        text = f"{len(failed)} criterion(s) failed: {', '.join(failed)}" if failed else "all criteria passed"
+        text = f"{len(failed)} criterion(s) failed: {', '.join(failed)}" if failed else (
+            "all criteria passed"
+        )
         if warnings:
             text += f"; {len(warnings)} warning(s)"
         verdict = f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.</div>'
+    headline = next((s.tables[0] for s in stages if s.name == "compare" and s.tables), None)
+    if headline is None:
+        headline = next((s.tables[0] for s in stages if s.name == "loads" and s.tables), None)
     bases = dict.fromkeys("simulate" if s.name == "compare" else s.name.split(":")[0] for s in stages)
     nav = "".join(f'<li><a href="#{b}">{_e(STAGE_TITLES.get(b, b))}</a></li>' for b in bases)
     parts = [
@@ -136,12 +159,15 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
         f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC</p>",
         verdict,
-        f"<nav><ol>{nav}</ol></nav>",
+        _table(headline) if headline is not None else "",
+        f"<nav><ul>{nav}</ul></nav>",
         '<h2 id="particulars">Particulars</h2>',
         _particulars(scenario),
     ]
-    if criteria:
-        parts += ['<h2 id="criteria">Acceptance criteria</h2>', _criteria(criteria)]
+    if lift:
+        parts += ['<h2 id="criteria">Lift criteria</h2>', _criteria(lift)]
+    if checks:
+        parts += ['<h2 id="checks">Numerical checks of the analysis</h2>', _criteria(checks)]
     if warnings:
         parts += ['<h2 id="warnings">Warnings</h2>'] + [
             f'<div class="warn"><b>{_e(name)}:</b> {_e(w)}</div>' for name, w in warnings
@@ -162,8 +188,6 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
             parts.append(f"<p>{_e(lead)}</p>")
         if s.warnings:
             parts.append(f'<p class="meta">{len(s.warnings)} warning(s): see <a href="#warnings">Warnings</a>.</p>')
-        if s.criteria:
-            parts.append(_criteria(s.criteria))
         parts += [_table(t) for t in s.tables]
         parts += [_figure(f) for f in s.figures]
     parts.append("</body></html>")
