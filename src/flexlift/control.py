@@ -59,14 +59,16 @@ class SupervisorTable:
 
     def pair(self, e, r):
         top = self.grid - 1 - 1e-9
-        sc = np.minimum(np.maximum((np.stack((e, r)) + 1.0) * (1.0 / self.h), 0.0), top)
-        i = sc.astype(np.intp)
-        f = sc - i
-        k = i[0] * self.grid + i[1]
+        inv_h = 1.0 / self.h
+        se = np.minimum(np.maximum((e + 1.0) * inv_h, 0.0), top)
+        sr = np.minimum(np.maximum((r + 1.0) * inv_h, 0.0), top)
+        ie, ir = se.astype(np.intp), sr.astype(np.intp)
+        fe, fr = se - ie, sr - ir
+        k = ie * self.grid + ir
         T = self.flat
         c00, c10, c01, c11 = T[k], T[k + self.grid], T[k + 1], T[k + self.grid + 1]
-        lo = c00 + f[0] * (c10 - c00)
-        return lo + f[1] * (c01 + f[0] * (c11 - c01) - lo)
+        lo = c00 + fe * (c10 - c00)
+        return lo + fr * (c01 + fe * (c11 - c01) - lo)
 
 
 class FillTable:

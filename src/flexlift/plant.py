@@ -256,6 +256,8 @@ class Fast:
         self.ps = np.ascontiguousarray(P.psi_s[:, :nr])  # (ns, nr)
         self.G = np.ascontiguousarray((P.psi_s[:, :nr] * P.ws[:, None]).T)  # (nr, ns)
         self.pp = np.ascontiguousarray(P.psi_p[:, :nr])  # (nb, nr)
+        self.pspp = np.vstack([self.ps, self.pp])  # (ns + nb, nr)
+        self.ns = self.ps.shape[0]
         self.Gb = np.ascontiguousarray(P.psi_b[:, :nr].T)  # (nr, nb)
         self.Qw = P.Q_weight[:nr].copy()
         self.om2 = P.omega2[:nr].copy()
@@ -285,8 +287,9 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
     n, H = x[2 * nr : 2 * nr + nb], x[-1]
     if not (sw.separated or sw.full):
         return _held_rates(F, sw, q, n, u)
-    w_s, v_s = F.ps @ q, F.ps @ v
-    z, zd = F.pp @ q, F.pp @ v
+    WZ = F.pspp @ x[: 2 * nr].reshape(2, nr).T  # displacements and velocities, strips and bags
+    ns = F.ns
+    w_s, v_s, z, zd = WZ[:ns, 0], WZ[:ns, 1], WZ[ns:, 0], WZ[ns:, 1]
     p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
     V = np.minimum(n * (F.RT / p), F.cap)
     F_bag = F.rg * V * sw.attached
