@@ -91,6 +91,30 @@ def check_faults(scenario, names) -> None:
             raise InputError(f"faults[{k}].bag", f.bag, f"known bags are {', '.join(names)}")
 
 
+def check_neutral(P) -> None:
+    """InputError when the bags cannot hold the hull neutral at the start (SPEC §5): the
+    internal bags full and the external bags sharing the rest of W' must fit their capacities."""
+    V = P.neutral_volumes()
+    to_t = P.gas.rho / 1000.0  # m^3 of displaced water -> tonnes of lift
+    if not P.external.any() or np.any(V < -1e-9):
+        internal_t = float(P.capacity[~P.external].sum()) * to_t
+        raise InputError(
+            "lift",
+            f"{internal_t:.0f} t of internal bags for {P.wet_weight / P.gas.g / 1000:.0f} t wet weight",
+            "the internal bags alone must lift less than the wet weight and there must be an "
+            "external bag to control; change internal_bags or bag_lift_t",
+        )
+    over = V > P.capacity * (1 + 1e-9)
+    if over.any():
+        k = int(np.flatnonzero(over)[0])
+        raise InputError(
+            f"lift.bags.{P.names[k]}",
+            f"{V[k] * to_t:.0f} t needed at the start",
+            f"each external bag must hold its share of the wet weight, but it lifts at most "
+            f"{P.capacity[k] * to_t:.0f} t; raise bag_lift_t or add bags",
+        )
+
+
 def simulate(scenario, control: str | None = None, duration: float | None = None,
              engine="table", progress=None, plant=None) -> Result:
     """Simulate the ascent of ``scenario``.
@@ -108,12 +132,13 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     T_end = float(duration if duration is not None else sim.duration_s)
     if not math.isfinite(T_end) or T_end <= 0:
         raise InputError("duration", duration, "must be a positive time [s]")
+    P = plant or build_plant(scenario)
+    check_faults(scenario, P.names)
+    check_neutral(P)
     if mode == "paper":
         from flexlift.paper import simulate_paper
 
         return simulate_paper(scenario, T_end, engine, progress)
-    P = plant or build_plant(scenario)
-    check_faults(scenario, P.names)
     return _run(scenario, P, mode, T_end, engine, progress)
 
 

@@ -55,22 +55,57 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a one-line usage error (code 2)
         return int(exc.code or 0)
-    logging.basicConfig(
-        level=logging.WARNING - 10 * min(args.verbose, 2),
-        format="flexlift: %(levelname)s: %(message)s",
-        stream=sys.stderr,
-    )
+    held = _HeldWarnings()
+    _configure_logging(args.verbose, held)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
     try:
-        return int(args.func(args) or 0)
-    except InputError as exc:
+        code = int(args.func(args) or 0)
+    except InputError as exc:  # bad input: this one line only, warnings dropped
         sys.stderr.write(f"flexlift {args.command}: error: {exc}\n")
         return 2
     except KeyboardInterrupt:
         sys.stderr.write(f"flexlift {args.command}: interrupted; previous output left intact\n")
         return 130
+    finally:
+        logging.getLogger("flexlift").removeHandler(held)
+    held.flush_to(sys.stderr)
+    return code
+
+
+class _HeldWarnings(logging.Handler):
+    """Keeps the library's warnings until the command ends, so that bad input stays one line
+    on stderr; a command that completes prints them after its own output."""
+
+    def __init__(self):
+        super().__init__(level=logging.WARNING)
+        self.setFormatter(logging.Formatter("flexlift: %(levelname)s: %(message)s"))
+        self.lines: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        line = self.format(record)
+        if line not in self.lines:  # a stage repeated per control mode warns once
+            self.lines.append(line)
+
+    def flush_to(self, stream) -> None:
+        for line in self.lines:
+            stream.write(line + "\n")
+
+
+def _configure_logging(verbose: int, held: logging.Handler) -> None:
+    root = logging.getLogger("flexlift")
+    for h in list(root.handlers):
+        if isinstance(h, _HeldWarnings | logging.StreamHandler):
+            root.removeHandler(h)
+    root.setLevel(logging.WARNING - 10 * min(verbose, 2))
+    root.propagate = False
+    root.addHandler(held)
+    if verbose:  # progress detail streams live; warnings still wait for the end
+        live = logging.StreamHandler(sys.stderr)
+        live.setFormatter(logging.Formatter("flexlift: %(levelname)s: %(message)s"))
+        live.addFilter(lambda r: r.levelno < logging.WARNING)
+        root.addHandler(live)
 
 
 if __name__ == "__main__":  # pragma: no cover
