@@ -312,6 +312,15 @@ class FIS:
         return agg[0] if single else agg
 
     def __call__(self, x):
+        fast = self._single_point
+        if fast is not None:
+            if type(x) is np.ndarray:
+                if x.ndim == 1 and x.shape[0] == self.n_inputs:
+                    return fast(x.tolist())
+            elif type(x) in (tuple, list) and len(x) == self.n_inputs and all(
+                type(v) in (float, int) for v in x
+            ):
+                return fast(x)
         a, single = self.points(x)
         c = self._compiled
         if len(a) <= c.chunk:
@@ -352,6 +361,53 @@ class FIS:
     @cached_property
     def _compiled(self) -> _Compiled:
         return _compile(self)
+
+    @cached_property
+    def _single_point(self):
+        """A lean evaluator of one point for the common system shape (two or more inputs, all
+        Gaussian sets, AND rules of weight 1, max aggregation, min or prod implication,
+        discrete centroid), or None. The same arithmetic as the general path, without its
+        array bookkeeping: an inner control loop evaluates one point at a time."""
+        c = self._compiled
+        if not (
+            self.n_inputs > 1
+            and len(c.groups) == 1
+            and c.groups[0][1] is None
+            and c.groups[0][0] is _k_gauss_fast
+            and not c.extra
+            and c.all_and
+            and c.weights is None
+            and self.aggregation == "max"
+            and self.defuzzification == "centroid"
+        ):
+            return None
+        _, _, (centre, k) = c.groups[0]
+        col, gather, curves, y1 = c.col_input, c.gather, c.curves, c.y1
+        starts = c.starts if c.grouped else None
+        lo, hi = c.lo.tolist(), c.hi.tolist()
+        land = np.minimum if self.and_method == "min" else np.multiply
+        cut = np.minimum if self.implication == "min" else np.multiply
+        mid = 0.5 * (float(c.y[0]) + float(c.y[-1]))
+
+        def one(values) -> float:
+            v = []
+            for xi, a, b in zip(values, lo, hi):
+                if xi != xi:
+                    raise InputError(
+                        "inputs", "NaN", "finite numbers (values beyond a range are saturated)"
+                    )
+                v.append(a if xi < a else b if xi > b else xi)
+            d = np.array(v)[col] - centre
+            g = np.exp(d * d * k)[gather]  # (n_inputs, R) memberships of each rule
+            w = g[0]
+            for i in range(1, len(g)):
+                w = land(w, g[i])
+            if starts is not None:
+                w = np.maximum.reduceat(w, starts)  # one strength per output set
+            num, den = cut(w[:, None], curves).max(axis=0) @ y1
+            return float(num / den) if den > 0.0 else mid
+
+        return one
 
 
 def _check_rule(k: int, r: Rule, inputs, output) -> None:
