@@ -52,6 +52,7 @@ class SupervisorTable:
         self.grid = grid
         self.h = 2.0 / (grid - 1)
         self.flat = self.values.ravel()
+        self.flat_list = self.flat.tolist()
 
     def __call__(self, x):
         x = np.asarray(x, dtype=float)
@@ -70,6 +71,23 @@ class SupervisorTable:
         lo = c00 + fe * (c10 - c00)
         return lo + fr * (c01 + fe * (c11 - c01) - lo)
 
+    def scalar(self, e: float, r: float) -> float:
+        """:meth:`pair` for two floats (the same arithmetic, no array overhead)."""
+        if e != e or r != r:
+            return float("nan")
+        top = self.grid - 1 - 1e-9
+        inv_h = 1.0 / self.h
+        se = min(max((e + 1.0) * inv_h, 0.0), top)
+        sr = min(max((r + 1.0) * inv_h, 0.0), top)
+        ie, ir = int(se), int(sr)
+        fe, fr = se - ie, sr - ir
+        g = self.grid
+        k = ie * g + ir
+        T = self.flat_list
+        c00, c10, c01, c11 = T[k], T[k + g], T[k + 1], T[k + g + 1]
+        lo = c00 + fe * (c10 - c00)
+        return lo + fr * (c01 + fe * (c11 - c01) - lo)
+
 
 class FillTable:
     """Linear lookup of the one-input fill map on ``grid`` points over [-1, 1]."""
@@ -78,8 +96,29 @@ class FillTable:
         self.x = np.linspace(-1.0, 1.0, grid)
         self.y = np.asarray(fill(self.x), dtype=float)
 
+        self._xl, self._yl = self.x.tolist(), self.y.tolist()
+        self._n, self._inv_h = grid, (grid - 1) / 2.0
+
     def __call__(self, d):
         return np.interp(d, self.x, self.y)
+
+    def scalar(self, d: float) -> float:
+        """:meth:`__call__` for one float (np.interp's arithmetic, no array overhead)."""
+        xs, ys = self._xl, self._yl
+        if d >= xs[-1]:
+            return ys[-1]
+        if d <= xs[0]:
+            return ys[0]
+        if d != d:
+            return d
+        j = min(max(int((d + 1.0) * self._inv_h), 0), self._n - 2)
+        while j > 0 and xs[j] > d:
+            j -= 1
+        while xs[j + 1] <= d:
+            j += 1
+        if d == xs[j]:
+            return ys[j]
+        return (ys[j + 1] - ys[j]) / (xs[j + 1] - xs[j]) * (d - xs[j]) + ys[j]
 
 
 def fuzzy_engines(scenario, engine="table"):
@@ -233,6 +272,9 @@ class Controller:
         self.a_filt = params.period / (DERIV_TAU + params.period)
         self.d_gain = 1.0 / np.sqrt(1.0 + params.lam**2) / params.d_scale
         self.coordinated = params.mode == "coordinated" and n > 1
+        # float-by-float arithmetic for the few bags of a hull (same operations, no array
+        # overhead) when both fuzzy maps are lookup tables
+        self._scalar = isinstance(supervisor, SupervisorTable) and isinstance(fill, FillTable)
         self._sup = getattr(supervisor, "pair", None) or (
             lambda e, r: np.asarray(supervisor(np.column_stack([np.clip(e, -1, 1), np.clip(r, -1, 1)])), dtype=float)
         )
@@ -307,6 +349,8 @@ class Controller:
             self.prof = None
             self.pending = bool(np.isnan(self.t_sep).any())
             self.started = True
+        if self._scalar and (separated is True or separated is False):
+            return self._step_scalar(t, z, zdot, V)
         if self.open_loop or not self.started:
             V_d = self.V_hold
             u = self.zeros
@@ -349,3 +393,76 @@ class Controller:
             fill = fill * self.active
             opening = opening * self.active
         return fill, opening, u, V_d, z_ref
+
+    def _step_scalar(self, t: float, z, zdot, V):
+        """:meth:`step` after the separation bookkeeping, bag by bag on floats (lookup tables,
+        one separation flag for all bags)."""
+        p = self.p
+        n = self.n
+        zl, zdl, Vl = z.tolist(), zdot.tolist(), V.tolist()
+        if self.open_loop or not self.started:
+            Vd = self.V_hold.tolist()
+            u = z_ref = None
+        else:
+            zr, zdr = self.reference(t)
+            zr, zdr = zr.tolist(), zdr.tolist()
+            sup = self.supervisor.scalar
+            inv_e, inv_r = self.inv_e, self.inv_r
+            u = [sup((zr[i] - zl[i]) * inv_e, (zdr[i] - zdl[i]) * inv_r) for i in range(n)]
+            Vn, dV = p.V_neutral.tolist(), p.dV_max.tolist()
+            Vd = [Vn[i] + u[i] * dV[i] for i in range(n)]
+            if self.pending:
+                hold = self.V_hold.tolist()
+                for i, pre in enumerate(np.isnan(self.t_sep).tolist()):
+                    if pre:
+                        Vd[i], u[i] = hold[i], 0.0
+            z_ref = zr
+        if self.coordinated and self.n_active > 1:
+            w = self._levelling()
+            corr = p.k_pitch * float(w @ z) + p.k_pitch_rate * float(w @ zdot)
+            lever = p.lever.tolist()
+            Vd = [Vd[i] - corr * lever[i] for i in range(n)]
+        eps = [Vd[i] - Vl[i] for i in range(n)]
+        prev = eps if self.prev_eps is None else self.prev_eps.tolist()
+        a, inv_T, lam, gain = self.a_filt, self.inv_T, p.lam, self.d_gain
+        rate = self.eps_rate.tolist()
+        fill_map = self.fill.scalar
+        db, fmax = p.deadband, p.fill_max
+        fill = [0.0] * n
+        for i in range(n):
+            r = rate[i] + a * ((eps[i] - prev[i]) * inv_T - rate[i])
+            rate[i] = r
+            d = (r + lam * eps[i]) * gain
+            fill[i] = fill_map(min(max(d, -1.0), 1.0)) * ((eps[i] > db) * fmax)
+        self.eps_rate = np.array(rate)
+        self.prev_eps = np.array(eps)
+        if self.open_loop:
+            opening = [0.0] * n
+        else:
+            opening = [0.0] * n
+            integ = self.integ.tolist()
+            prev_x = self.prev_excess.tolist()
+            kp, ki, kd, T = p.kp, p.ki, p.kd, p.period
+            for i in range(n):
+                excess = -eps[i]
+                raw = kp * excess + ki * integ[i]
+                if kd:
+                    raw = raw + kd * (excess - prev_x[i]) * inv_T
+                    prev_x[i] = excess
+                on = excess > db or integ[i] > 0.0
+                hold_i = (raw >= 1.0 and excess > 0) or not on
+                integ[i] = max(integ[i] + (0.0 if hold_i else excess * T), 0.0)
+                opening[i] = min(max(raw, 0.0), 1.0) * on
+                fill[i] = fill[i] * (opening[i] <= 0.0)
+            self.integ = np.array(integ)
+            if kd:
+                self.prev_excess = np.array(prev_x)
+        fill, opening = np.array(fill), np.array(opening)
+        if self.n_active < self.n:
+            fill = fill * self.active
+            opening = opening * self.active
+        if u is None:
+            u = z_ref = self.zeros
+        else:
+            u, z_ref = np.array(u), np.array(z_ref)
+        return fill, opening, u, np.array(Vd), z_ref
