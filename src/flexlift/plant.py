@@ -218,6 +218,8 @@ class Switches:
     noise_s: np.ndarray = None  # type: ignore[assignment]
     noisy: bool = False
     full: bool = False  # compute the strip loads even while held (for recording)
+    intact: bool = True  # attached and supply all 1 and leak all 0 (cleared by a bag fault)
+    rates: bool = True  # False: leave the mechanical rates (unused by the ETD2 loop) out of dx
 
     def __post_init__(self):
         self.attached = np.ones(self.nb)
@@ -241,7 +243,7 @@ class Aux:
     contact: np.ndarray  # (ns,) contact line load [N/m]
     active: np.ndarray | None  # (ns,) bool contact active (None: held, all)
     w_s: np.ndarray  # (ns,) strip displacement [m]
-    accel: np.ndarray  # (nr,) modal accelerations
+    accel: np.ndarray | None  # (nr,) modal accelerations (None: left out, Switches.rates)
     line: np.ndarray  # (ns,) line load at the strips except weight [N/m]
     point: np.ndarray  # (nb,) forces at the bags' points incl. bag drag [N]
     Qext: np.ndarray | None = None  # (nr,) generalised force without stiffness, damping, contact
@@ -271,6 +273,7 @@ class Fast:
         self.k, self.c = P.seabed.stiffness, P.seabed.damping
         self.H0, self.Tb, self.tau = P.seabed.H0, P.seabed.breakout_time, P.seabed.release_time
         self.drag, self.drag_bag = P.drag_line, P.drag_bag
+        self.neg_k, self.neg_drag, self.inv_RT = -self.k, -self.drag, 1.0 / self.RT
         self.W = P.wet_weight
         Kc = self.k * self.G @ self.ps
         self.static = np.linalg.inv(np.diag(self.om2) + Kc)  # held: quasi-static compliance
@@ -292,32 +295,45 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
     w_s, v_s, z, zd = WZ[:ns, 0], WZ[:ns, 1], WZ[ns:, 0], WZ[ns:, 1]
     p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
     V = np.minimum(n * (F.RT / p), F.cap)
-    F_bag = F.rg * V * sw.attached
-    vr = v_s - sw.current if sw.current else v_s
-    qc = -F.k * w_s - F.c * v_s
+    intact = sw.intact  # every sling and supply holds, no leak: skip the unit factors
+    F_bag = F.rg * V if intact else F.rg * V * sw.attached
+    cur = sw.current
+    vr = v_s - cur if cur else v_s
+    qc = F.neg_k * w_s - F.c * v_s
     if sw.separated:
         active = (w_s < 0.0) & (qc > 0.0)
         qc = qc * active
     else:
         active = None
-    vb = zd - sw.current if sw.current else zd
-    F_pt = F_bag - F.drag_bag * np.abs(vb) * vb * sw.attached
-    ext = -F.drag * np.abs(vr) * vr
+    vb = zd - cur if cur else zd
+    if intact:
+        F_pt = F_bag - F.drag_bag * np.abs(vb) * vb
+    else:
+        F_pt = F_bag - F.drag_bag * np.abs(vb) * vb * sw.attached
+    ext = F.neg_drag * np.abs(vr) * vr
     if sw.noisy:
         ext = ext + sw.noise_s
     Qext = F.G @ ext + F.Gb @ F_pt + F.Qw
     if sw.separated:
         Qext = Qext - H * F.Qhold
-    acc = Qext + F.G @ qc - F.om2 * q - F.damp * v
-    fill = u[:nb] * sw.supply
+    fill = u[:nb].copy() if intact else u[:nb] * sw.supply
     purge = F.purge_max * u[nb:] * np.sqrt(V * F.inv_cap)
-    ndot = p * (fill - purge) * (1.0 / F.RT) - sw.leak * n
-    U = float(F_bag.sum()) - F.W
+    ndot = p * (fill - purge) * F.inv_RT
+    if not intact:
+        ndot = ndot - sw.leak * n
+    U = sum(F_bag.tolist()) - F.W
     if sw.separated:
         Hdot = -H / F.tau
     else:
         Hdot = -(F.H0 / F.Tb) * min(U / F.H0, 1.0) if U > 0 else 0.0
-    dx = np.concatenate([v, acc, ndot, [Hdot]])
+    if sw.rates or sw.full:
+        acc = Qext + F.G @ qc - F.om2 * q - F.damp * v
+        dx = np.concatenate([v, acc, ndot, [Hdot]])
+    else:  # the mechanical rates left out (zero): the caller steps the mechanics itself
+        acc = None
+        dx = np.zeros(2 * nr + nb + 1)
+        dx[2 * nr : 2 * nr + nb] = ndot
+        dx[-1] = Hdot
     return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, ext + qc, F_pt, Qext)
 
 
@@ -332,7 +348,7 @@ def _held_rates(F: Fast, sw, q, n, u):
     fill = u[:nb] * sw.supply
     purge = F.purge_max * u[nb:] * np.sqrt(V * F.inv_cap)
     ndot = p * (fill - purge) * (1.0 / F.RT) - sw.leak * n
-    U = float(F_bag.sum()) - F.W
+    U = sum(F_bag.tolist()) - F.W
     Hdot = -(F.H0 / F.Tb) * min(U / F.H0, 1.0) if U > 0 else 0.0
     dx = np.zeros(2 * F.nr + nb + 1)
     dx[2 * F.nr : 2 * F.nr + nb] = ndot

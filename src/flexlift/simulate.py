@@ -183,6 +183,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     x[:nr] = held_state(F, x, sw)
     params = (P, sw, F, {})  # the last: ETD2 matrices of sub-steps, per step length
     sw.noisy = dist.force_noise_N_m > 0
+    sw.rates = False  # the mechanics are stepped by ETD2 (or held static): no rates needed
     etd_cache = {}
     tau = P.seabed.release_time
     decay = math.exp(-dt / tau)
@@ -230,13 +231,16 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             detail = ""
             if f.kind == "bag_rupture":
                 sw.leak[i] = 1.0 / f.leak_time_s
+                sw.intact = False
                 leaking = True
             elif f.kind == "sling_break":
                 sw.attached[i] = 0.0
+                sw.intact = False
                 if i in ctrl_idx:
                     ctrl.lose(ctrl_idx[i])
             elif f.kind == "supply_failure":
                 sw.supply[i] = 0.0
+                sw.intact = False
             elif f.kind == "sensor_drift":
                 drift[i], drift_t0[i] = f.rate_m_s, t
             elif f.kind == "sensor_stuck":
