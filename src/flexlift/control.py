@@ -275,6 +275,8 @@ class Controller:
         # float-by-float arithmetic for the few bags of a hull (same operations, no array
         # overhead) when both fuzzy maps are lookup tables
         self._scalar = isinstance(supervisor, SupervisorTable) and isinstance(fill, FillTable)
+        self._Vn, self._dV = params.V_neutral.tolist(), params.dV_max.tolist()
+        self._ref_l = None  # (profile, signs, start heights) as lists for the flat profile
         self._sup = getattr(supervisor, "pair", None) or (
             lambda e, r: np.asarray(supervisor(np.column_stack([np.clip(e, -1, 1), np.clip(r, -1, 1)])), dtype=float)
         )
@@ -316,6 +318,25 @@ class Controller:
                        np.where(tau < tb, vp * (tau - 0.5 * ta), D - (0.5 * a) * r * r))
         vel = np.minimum(np.minimum(a * tau, vp), a * r)
         return self.z0 + sgn * pos, sgn * vel
+
+    def _reference_lists(self, t: float):
+        """:meth:`reference` as two lists of floats (the same arithmetic)."""
+        prof = self.prof
+        if prof is not None and prof[-1] is not None:
+            t_start, ta_s, vp_s, tb_min = prof[-1]
+            tau = max(t - t_start, 0.0)
+            if tau < tb_min:
+                if self._ref_l is None or self._ref_l[0] is not prof:
+                    self._ref_l = (prof, prof[0].tolist(), self.z0.tolist())
+                _, sgn, z0 = self._ref_l
+                a = self.p.accel
+                if tau < ta_s:
+                    s, v = 0.5 * a * tau * tau, a * tau
+                else:
+                    s, v = vp_s * (tau - 0.5 * ta_s), vp_s
+                return [z0[i] + sgn[i] * s for i in range(len(sgn))], [g * v for g in sgn]
+        zr, zdr = self.reference(t)
+        return zr.tolist(), zdr.tolist()
 
     def _levelling(self):
         """Lever arms about the live bags' centre and 1 / sum of their squares (cached)."""
@@ -404,12 +425,11 @@ class Controller:
             Vd = self.V_hold.tolist()
             u = z_ref = None
         else:
-            zr, zdr = self.reference(t)
-            zr, zdr = zr.tolist(), zdr.tolist()
+            zr, zdr = self._reference_lists(t)
             sup = self.supervisor.scalar
             inv_e, inv_r = self.inv_e, self.inv_r
             u = [sup((zr[i] - zl[i]) * inv_e, (zdr[i] - zdl[i]) * inv_r) for i in range(n)]
-            Vn, dV = p.V_neutral.tolist(), p.dV_max.tolist()
+            Vn, dV = self._Vn, self._dV
             Vd = [Vn[i] + u[i] * dV[i] for i in range(n)]
             if self.pending:
                 hold = self.V_hold.tolist()

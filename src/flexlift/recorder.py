@@ -83,7 +83,10 @@ class Recorder:
             if k % self.k_str == 0:
                 self._snapshot(t, x, aux, sw)
             return
-        v = float(np.abs(aux.zdot * sw.attached).max())
+        if sw.intact:  # every sling holds: the largest |zdot| without the array round trips
+            v = max(map(abs, aux.zdot.tolist()))
+        else:
+            v = float(np.abs(aux.zdot * sw.attached).max())
         pitch = abs(float(x[1]) * P.pitch_slope)
         if v > self.vmax:
             self.vmax = v
@@ -95,7 +98,7 @@ class Recorder:
             if np.degrees(pitch) > self.limits.pitch_deg and not self.has("limit_pitch"):
                 self.event(t, "limit_pitch", None, f"{np.degrees(pitch):.1f} deg")
         if sw.separated and not self.resettled:
-            wmin = float(aux.w_s.min())
+            wmin = min(aux.w_s.tolist())
             if not self.liftoff and wmin > 0.05:
                 self.liftoff = True
                 self.event(t, "liftoff", None, "the whole hull is clear of the seabed")

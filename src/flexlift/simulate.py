@@ -77,7 +77,8 @@ def _substeps(x, t0, span, n, dx, aux, b_prev, u, params, tau, gas):
 
 def _etd(cache, P, h, active):
     """ETD2 matrices for a step ``h`` [s] and contact pattern ``active``, cached per pattern."""
-    key = active.tobytes() if active is not None and active.any() else None
+    # no contact (None or all False) gives the same matrices under either key
+    key = active.tobytes() if active is not None else None
     mats = cache.get(key)
     if mats is None:
         mats = cache[key] = etd_matrices(P, h, active)
@@ -176,6 +177,11 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     fi = 0
     name_idx = {n: i for i, n in enumerate(P.names)}
     ctrl_idx = {int(b): k for k, b in enumerate(ext)}
+    # the controlled bags as a slice when they are consecutive (cheaper than fancy indexing)
+    if ext.size and np.all(np.diff(ext) == 1):
+        ext_ix, ext_u = slice(int(ext[0]), int(ext[-1]) + 1), slice(nb + int(ext[0]), nb + int(ext[-1]) + 1)
+    else:
+        ext_ix, ext_u = ext, nb + ext
 
     x = P.initial_state()
     u = np.zeros(2 * nb)
@@ -274,9 +280,9 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
                 zdm = np.where(frozen, last[1], zdm)
                 Vm = np.where(frozen, last[2], Vm)
                 last = (zm, zdm, Vm)
-            cmd = ctrl.step(t, zm[ext], zdm[ext], Vm[ext], sw.separated)
-            u[ext] = cmd[0]
-            u[nb + ext] = cmd[1]
+            cmd = ctrl.step(t, zm[ext_ix], zdm[ext_ix], Vm[ext_ix], sw.separated)
+            u[ext_ix] = cmd[0]
+            u[ext_u] = cmd[1]
         sw.full = k % rec.k_out == 0 or k % rec.k_str == 0
         dx, aux = dynamics(t, x, u, params)
         if not sw.separated:  # held: the hull sits in quasi-static equilibrium on the seabed
@@ -284,7 +290,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             x[:nr] = F.static @ (Qh + F.G @ sw.noise_s if sw.noisy else Qh)
         rec.sample(k, t, x, aux, u, cmd, ext, sw)
         # events on the current state
-        zmax = aux.z.max()
+        zmax = max(aux.z.tolist())
         if zmax > top_min:
             live = (aux.z > top_limit) & (sw.attached > 0)
             if live.any():
@@ -314,7 +320,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             # second order in the rest (ETD2); holding force: exact exponential release
             H_old = x[-1]
             b = aux.Qext
-            if aux.w_s.min() < LIFTOFF_CLEARANCE:
+            if min(aux.w_s.tolist()) < LIFTOFF_CLEARANCE:
                 # on or near the seabed: contact springs engage and release inside the step;
                 # sub-steps keep those switches off the coarse step grid
                 xj = _substeps(x, t, dt, CONTACT_SUBSTEPS, dx, aux, b_prev, u, params, tau, True)
@@ -336,7 +342,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
         # spill (open bags) and relief venting (closed bags) at the local pressure
         n_max = (aux.pressure + relief) * P.capacity * (1.0 / F.RT)
         over = x[nsl] - n_max
-        if over.max() > 0.0:
+        if max(over.tolist()) > 0.0:
             over = np.maximum(over, 0.0)
             rec.vent(over * F.RT / aux.pressure)
             x[nsl] -= over
