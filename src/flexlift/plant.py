@@ -247,6 +247,7 @@ class Aux:
     line: np.ndarray  # (ns,) line load at the strips except weight [N/m]
     point: np.ndarray  # (nb,) forces at the bags' points incl. bag drag [N]
     Qext: np.ndarray | None = None  # (nr,) generalised force without stiffness, damping, contact
+    w_min: float | None = None  # lowest strip displacement [m] (None: not computed, held)
 
 
 class Fast:
@@ -278,6 +279,7 @@ class Fast:
         Kc = self.k * self.G @ self.ps
         self.static = np.linalg.inv(np.diag(self.om2) + Kc)  # held: quasi-static compliance
         self.zero_nb, self.zero_nr = np.zeros(self.nb), np.zeros(nr)
+        self.zero_ns, self.no_contact = np.zeros(self.ns), np.zeros(self.ns, dtype=bool)  # read-only
 
 
 def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
@@ -299,12 +301,16 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
     F_bag = F.rg * V if intact else F.rg * V * sw.attached
     cur = sw.current
     vr = v_s - cur if cur else v_s
-    qc = F.neg_k * w_s - F.c * v_s
-    if sw.separated:
-        active = (w_s < 0.0) & (qc > 0.0)
-        qc = qc * active
+    w_min = min(w_s.tolist())
+    if sw.separated and w_min >= 0.0:  # clear of the seabed: no spring is active
+        qc, active = F.zero_ns, F.no_contact
     else:
-        active = None
+        qc = F.neg_k * w_s - F.c * v_s
+        if sw.separated:
+            active = (w_s < 0.0) & (qc > 0.0)
+            qc = qc * active
+        else:
+            active = None
     vb = zd - cur if cur else zd
     if intact:
         F_pt = F_bag - F.drag_bag * np.abs(vb) * vb
@@ -334,7 +340,8 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
         dx = np.zeros(2 * nr + nb + 1)
         dx[2 * nr : 2 * nr + nb] = ndot
         dx[-1] = Hdot
-    return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, ext + qc, F_pt, Qext)
+    line = ext if qc is F.zero_ns else ext + qc
+    return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, line, F_pt, Qext, w_min)
 
 
 def _held_rates(F: Fast, sw, q, n, u):

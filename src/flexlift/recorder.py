@@ -98,7 +98,7 @@ class Recorder:
             if np.degrees(pitch) > self.limits.pitch_deg and not self.has("limit_pitch"):
                 self.event(t, "limit_pitch", None, f"{np.degrees(pitch):.1f} deg")
         if sw.separated and not self.resettled:
-            wmin = min(aux.w_s.tolist())
+            wmin = aux.w_min
             if not self.liftoff and wmin > 0.05:
                 self.liftoff = True
                 self.event(t, "liftoff", None, "the whole hull is clear of the seabed")

@@ -320,7 +320,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             # second order in the rest (ETD2); holding force: exact exponential release
             H_old = x[-1]
             b = aux.Qext
-            if min(aux.w_s.tolist()) < LIFTOFF_CLEARANCE:
+            if aux.w_min < LIFTOFF_CLEARANCE:
                 # on or near the seabed: contact springs engage and release inside the step;
                 # sub-steps keep those switches off the coarse step grid
                 xj = _substeps(x, t, dt, CONTACT_SUBSTEPS, dx, aux, b_prev, u, params, tau, True)
