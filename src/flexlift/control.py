@@ -449,22 +449,19 @@ class Controller:
         fill_map = self.fill.scalar
         db, fmax = p.deadband, p.fill_max
         fill = [0.0] * n
+        opening = [0.0] * n
+        purge = not self.open_loop
+        integ = self.integ.tolist()
+        prev_x = self.prev_excess.tolist()
+        kp, ki, kd, T = p.kp, p.ki, p.kd, p.period
         for i in range(n):
-            r = rate[i] + a * ((eps[i] - prev[i]) * inv_T - rate[i])
+            e = eps[i]
+            r = rate[i] + a * ((e - prev[i]) * inv_T - rate[i])
             rate[i] = r
-            d = (r + lam * eps[i]) * gain
-            fill[i] = fill_map(min(max(d, -1.0), 1.0)) * ((eps[i] > db) * fmax)
-        self.eps_rate = np.array(rate)
-        self.prev_eps = np.array(eps)
-        if self.open_loop:
-            opening = [0.0] * n
-        else:
-            opening = [0.0] * n
-            integ = self.integ.tolist()
-            prev_x = self.prev_excess.tolist()
-            kp, ki, kd, T = p.kp, p.ki, p.kd, p.period
-            for i in range(n):
-                excess = -eps[i]
+            d = (r + lam * e) * gain
+            f = fill_map(min(max(d, -1.0), 1.0)) * ((e > db) * fmax)
+            if purge:
+                excess = -e
                 raw = kp * excess + ki * integ[i]
                 if kd:
                     raw = raw + kd * (excess - prev_x[i]) * inv_T
@@ -472,8 +469,13 @@ class Controller:
                 on = excess > db or integ[i] > 0.0
                 hold_i = (raw >= 1.0 and excess > 0) or not on
                 integ[i] = max(integ[i] + (0.0 if hold_i else excess * T), 0.0)
-                opening[i] = min(max(raw, 0.0), 1.0) * on
-                fill[i] = fill[i] * (opening[i] <= 0.0)
+                op = min(max(raw, 0.0), 1.0) * on
+                opening[i] = op
+                f = f * (op <= 0.0)
+            fill[i] = f
+        self.eps_rate = np.array(rate)
+        self.prev_eps = np.array(eps)
+        if purge:
             self.integ = np.array(integ)
             if kd:
                 self.prev_excess = np.array(prev_x)
