@@ -321,22 +321,37 @@ class Controller:
 
     def _reference_lists(self, t: float):
         """:meth:`reference` as two lists of floats (the same arithmetic)."""
+        if self.prof is None:
+            self.reference(t)  # builds the profile
         prof = self.prof
-        if prof is not None and prof[-1] is not None:
-            t_start, ta_s, vp_s, tb_min = prof[-1]
+        if self._ref_l is None or self._ref_l[0] is not prof:
+            self._ref_l = (prof, self.z0.tolist()) + tuple(v.tolist() for v in prof[:7])
+        _, z0, sgn, D, vp, ta, tb, T, t0 = self._ref_l
+        a = self.p.accel
+        flat = prof[-1]
+        if flat is not None:  # one start time, cruise reached by every bag: scalar phases
+            t_start, ta_s, vp_s, tb_min = flat
             tau = max(t - t_start, 0.0)
             if tau < tb_min:
-                if self._ref_l is None or self._ref_l[0] is not prof:
-                    self._ref_l = (prof, prof[0].tolist(), self.z0.tolist())
-                _, sgn, z0 = self._ref_l
-                a = self.p.accel
                 if tau < ta_s:
                     s, v = 0.5 * a * tau * tau, a * tau
                 else:
                     s, v = vp_s * (tau - 0.5 * ta_s), vp_s
                 return [z0[i] + sgn[i] * s for i in range(len(sgn))], [g * v for g in sgn]
-        zr, zdr = self.reference(t)
-        return zr.tolist(), zdr.tolist()
+        zr, zdr = [], []
+        half_a = 0.5 * a
+        for i in range(len(sgn)):
+            tau = max(t - t0[i], 0.0)
+            r = max(T[i] - tau, 0.0)
+            if tau < ta[i]:
+                pos = half_a * tau * tau
+            elif tau < tb[i]:
+                pos = vp[i] * (tau - 0.5 * ta[i])
+            else:
+                pos = D[i] - half_a * r * r
+            zr.append(z0[i] + sgn[i] * pos)
+            zdr.append(sgn[i] * min(min(a * tau, vp[i]), a * r))
+        return zr, zdr
 
     def _levelling(self):
         """Lever arms about the live bags' centre and 1 / sum of their squares (cached)."""
