@@ -219,6 +219,9 @@ class Switches:
     noisy: bool = False
     full: bool = False  # compute the strip loads even while held (for recording)
     intact: bool = True  # attached and supply all 1 and leak all 0 (cleared by a bag fault)
+    # (z, zdot, p, V) at the bag points of the state the next dynamics call gets, when the
+    # caller has them (the controllers' measurements); the caller clears it after that call
+    meas: tuple | None = None
     rates: bool = True  # False: leave the mechanical rates (unused by the ETD2 loop) out of dx
 
     def __post_init__(self):
@@ -290,13 +293,19 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
     nr, nb = F.nr, F.nb
     q, v = x[:nr], x[nr : 2 * nr]
     n, H = x[2 * nr : 2 * nr + nb], x[-1]
+    meas = sw.meas
     if not (sw.separated or sw.full):
-        return _held_rates(F, sw, q, n, u)
-    WZ = F.pspp @ x[: 2 * nr].reshape(2, nr).T  # displacements and velocities, strips and bags
-    ns = F.ns
-    w_s, v_s, z, zd = WZ[:ns, 0], WZ[:ns, 1], WZ[ns:, 0], WZ[ns:, 1]
-    p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
-    V = np.minimum(n * (F.RT / p), F.cap)
+        return _held_rates(F, sw, q, n, u, meas)
+    if meas is None:
+        WZ = F.pspp @ x[: 2 * nr].reshape(2, nr).T  # displacements and velocities, strips and bags
+        ns = F.ns
+        w_s, v_s, z, zd = WZ[:ns, 0], WZ[:ns, 1], WZ[ns:, 0], WZ[ns:, 1]
+        p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
+        V = np.minimum(n * (F.RT / p), F.cap)
+    else:  # the bags' heights, velocities, pressures and volumes of this state, given
+        z, zd, p, V = meas
+        WS = F.ps @ x[: 2 * nr].reshape(2, nr).T
+        w_s, v_s = WS[:, 0], WS[:, 1]
     intact = sw.intact  # every sling and supply holds, no leak: skip the unit factors
     F_bag = F.rg * V if intact else F.rg * V * sw.attached
     cur = sw.current
@@ -344,13 +353,16 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
     return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, line, F_pt, Qext, w_min)
 
 
-def _held_rates(F: Fast, sw, q, n, u):
+def _held_rates(F: Fast, sw, q, n, u, meas=None):
     """The rates while the hull is held (its mechanics quasi-static: see :func:`held_state`);
-    the strip loads are left out of Aux (None) unless ``sw.full``."""
+    the strip loads are left out of Aux (None) unless ``sw.full``; ``meas`` as Switches.meas."""
     nb = F.nb
-    z = F.pp @ q
-    p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
-    V = np.minimum(n * (F.RT / p), F.cap)
+    if meas is None:
+        z = F.pp @ q
+        p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
+        V = np.minimum(n * (F.RT / p), F.cap)
+    else:
+        z, _, p, V = meas
     F_bag = F.rg * V * sw.attached
     fill = u[:nb] * sw.supply
     purge = F.purge_max * u[nb:] * np.sqrt(V * F.inv_cap)

@@ -267,7 +267,9 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             q = x[:nr]
             zm = F.pp @ q
             zdm = F.pp @ x[nr:m2]
-            Vm = np.minimum(x[nsl] * (F.RT / (F.p_atm + F.rg * np.maximum(F.depth - zm, 0.0))), F.cap)
+            pm = F.p_atm + F.rg * np.maximum(F.depth - zm, 0.0)
+            Vm = np.minimum(x[nsl] * (F.RT / pm), F.cap)
+            sw.meas = (zm, zdm, pm, Vm)  # the dynamics of this state reuse them
             if any_sensor_fault:
                 zm = zm + drift * np.maximum(t - drift_t0, 0.0)
             if noisy:
@@ -285,6 +287,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             u[ext_u] = cmd[1]
         sw.full = k % rec.k_out == 0 or k % rec.k_str == 0
         dx, aux = dynamics(t, x, u, params)
+        sw.meas = None
         if not sw.separated:  # held: the hull sits in quasi-static equilibrium on the seabed
             Qh = F.Gb @ aux.point + F.Qw
             x[:nr] = F.static @ (Qh + F.G @ sw.noise_s if sw.noisy else Qh)
