@@ -441,11 +441,29 @@ class Controller:
             u = z_ref = None
         else:
             zr, zdr = self._reference_lists(t)
-            sup = self.supervisor.scalar
             inv_e, inv_r = self.inv_e, self.inv_r
-            u = [sup((zr[i] - zl[i]) * inv_e, (zdr[i] - zdl[i]) * inv_r) for i in range(n)]
             Vn, dV = self._Vn, self._dV
-            Vd = [Vn[i] + u[i] * dV[i] for i in range(n)]
+            S = self.supervisor  # SupervisorTable.scalar inlined (the same arithmetic)
+            Tf, g = S.flat_list, S.grid
+            top, inv_h = g - 1 - 1e-9, 1.0 / S.h
+            u = [0.0] * n
+            Vd = [0.0] * n
+            for i in range(n):
+                e = (zr[i] - zl[i]) * inv_e
+                r = (zdr[i] - zdl[i]) * inv_r
+                if e != e or r != r:
+                    ui = float("nan")
+                else:
+                    se = min(max((e + 1.0) * inv_h, 0.0), top)
+                    sr = min(max((r + 1.0) * inv_h, 0.0), top)
+                    ie, ir = int(se), int(sr)
+                    fe, fr = se - ie, sr - ir
+                    k = ie * g + ir
+                    c00, c10, c01, c11 = Tf[k], Tf[k + g], Tf[k + 1], Tf[k + g + 1]
+                    lo = c00 + fe * (c10 - c00)
+                    ui = lo + fr * (c01 + fe * (c11 - c01) - lo)
+                u[i] = ui
+                Vd[i] = Vn[i] + ui * dV[i]
             if self.pending:
                 hold = self.V_hold.tolist()
                 for i, pre in enumerate(np.isnan(self.t_sep).tolist()):
@@ -495,7 +513,7 @@ class Controller:
             if kd:
                 self.prev_excess = np.array(prev_x)
         fill, opening = np.array(fill), np.array(opening)
-        if self.n_active < self.n:
+        if self._lost:
             fill = fill * self.active
             opening = opening * self.active
         if u is None:
