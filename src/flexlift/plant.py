@@ -231,26 +231,52 @@ class Switches:
         self.noise_s = np.zeros(self.ns)
 
 
-@dataclass
 class Aux:
-    """Quantities computed with the rates that the loop records."""
+    """Quantities computed with the rates that the loop records.
 
-    z: np.ndarray  # bag point heights (retained modes) [m]
-    zdot: np.ndarray  # bag point velocities [m/s]
-    volume: np.ndarray  # gas volumes [m^3]
-    pressure: np.ndarray  # ambient pressure at bag points [Pa]
-    bag_force: np.ndarray  # buoyancy force on the hull [N]
-    fill: np.ndarray  # fill flow [m^3/s]
-    purge: np.ndarray  # purge flow [m^3/s]
-    uplift: float  # U = sum lift - W' [N]
-    contact: np.ndarray  # (ns,) contact line load [N/m]
-    active: np.ndarray | None  # (ns,) bool contact active (None: held, all)
-    w_s: np.ndarray  # (ns,) strip displacement [m]
-    accel: np.ndarray | None  # (nr,) modal accelerations (None: left out, Switches.rates)
-    line: np.ndarray  # (ns,) line load at the strips except weight [N/m]
-    point: np.ndarray  # (nb,) forces at the bags' points incl. bag drag [N]
-    Qext: np.ndarray | None = None  # (nr,) generalised force without stiffness, damping, contact
-    w_min: float | None = None  # lowest strip displacement [m] (None: not computed, held)
+    z : bag point heights (retained modes) [m]; zdot : their velocities [m/s]
+    volume : gas volumes [m^3]; pressure : ambient pressure at the bag points [Pa]
+    bag_force : buoyancy force on the hull [N]; fill, purge : fill and purge flows [m^3/s]
+    uplift : U = sum lift - W' [N]
+    contact : (ns,) contact line load [N/m]; active : (ns,) bool contact active (None: held)
+    w_s : (ns,) strip displacement [m]; w_min : its lowest value [m] (None: held)
+    accel : (nr,) modal accelerations (None: left out, Switches.rates)
+    line : (ns,) line load at the strips except weight [N/m]
+    point : (nb,) forces at the bags' points incl. bag drag [N]
+    Qext : (nr,) generalised force without stiffness, damping, contact
+    ``line`` and ``point`` may be given as None with ``parts`` = (Fast, v|v| at strips and
+    bags, contact, bag_force): then they are formed when first read (recording only).
+    """
+
+    __slots__ = ("z", "zdot", "volume", "pressure", "bag_force", "fill", "purge", "uplift",
+                 "contact", "active", "w_s", "accel", "_line", "_point", "Qext", "w_min", "_parts")
+
+    def __init__(self, z, zdot, volume, pressure, bag_force, fill, purge, uplift, contact, active,
+                 w_s, accel, line, point, Qext=None, w_min=None, parts=None):
+        self.z, self.zdot, self.volume, self.pressure = z, zdot, volume, pressure
+        self.bag_force, self.fill, self.purge, self.uplift = bag_force, fill, purge, uplift
+        self.contact, self.active, self.w_s, self.accel = contact, active, w_s, accel
+        self._line, self._point, self.Qext, self.w_min, self._parts = line, point, Qext, w_min, parts
+
+    def _form(self):
+        F, ad, qc, F_bag = self._parts
+        ns = F.ns
+        line = F.neg_drag * ad[:ns]
+        self._line = line if qc is F.zero_ns else line + qc
+        self._point = F_bag - F.drag_bag * ad[ns:]
+        self._parts = None
+
+    @property
+    def line(self):
+        if self._parts is not None:
+            self._form()
+        return self._line
+
+    @property
+    def point(self):
+        if self._parts is not None:
+            self._form()
+        return self._point
 
 
 class Fast:
@@ -283,6 +309,9 @@ class Fast:
         self.static = np.linalg.inv(np.diag(self.om2) + Kc)  # held: quasi-static compliance
         self.zero_nb, self.zero_nr = np.zeros(self.nb), np.zeros(nr)
         self.zero_ns, self.no_contact = np.zeros(self.ns), np.zeros(self.ns, dtype=bool)  # read-only
+        # drag of strips and bags at once: generalised force per unit v|v| (strips, then bags)
+        self.Gdrag = np.hstack([self.G * -self.drag, self.Gb * -self.drag_bag[None, :]])
+        self.psppT = np.ascontiguousarray(self.pspp.T)  # (nr, ns + nb)
 
 
 def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
@@ -296,6 +325,8 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
     meas = sw.meas
     if not (sw.separated or sw.full):
         return _held_rates(F, sw, q, n, u, meas)
+    if sw.intact and not sw.noisy and not sw.current:
+        return _free_rates(F, sw, x, u, meas)
     if meas is None:
         WZ = F.pspp @ x[: 2 * nr].reshape(2, nr).T  # displacements and velocities, strips and bags
         ns = F.ns
@@ -351,6 +382,56 @@ def dynamics(t: float, x: np.ndarray, u: np.ndarray, params):
         dx[-1] = Hdot
     line = ext if qc is F.zero_ns else ext + qc
     return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, line, F_pt, Qext, w_min)
+
+
+def _free_rates(F: Fast, sw, x, u, meas):
+    """:func:`dynamics` (not held, or recording) with every sling and supply intact, no leak,
+    force noise or current: the strip and bag drag in one product; Aux.line and Aux.point are
+    formed only when read."""
+    nr, nb, ns = F.nr, F.nb, F.ns
+    m2 = 2 * nr
+    n, H = x[m2 : m2 + nb], x[-1]
+    WZ = x[:m2].reshape(2, nr) @ F.psppT  # rows: displacements, velocities (strips, then bags)
+    w_s, vel = WZ[0, :ns], WZ[1]
+    if meas is None:
+        z, zd = WZ[0, ns:], vel[ns:]
+        p = F.p_atm + F.rg * np.maximum(F.depth - z, 0.0)
+        V = np.minimum(n * (F.RT / p), F.cap)
+    else:
+        z, zd, p, V = meas
+    F_bag = F.rg * V
+    w_min = min(w_s.tolist())
+    if sw.separated and w_min >= 0.0:  # clear of the seabed: no spring is active
+        qc, active = F.zero_ns, F.no_contact
+    else:
+        qc = F.neg_k * w_s - F.c * vel[:ns]
+        if sw.separated:
+            active = (w_s < 0.0) & (qc > 0.0)
+            qc = qc * active
+        else:
+            active = None
+    ad = np.abs(vel) * vel
+    Qext = F.Gdrag @ ad + F.Gb @ F_bag + F.Qw
+    if sw.separated:
+        Qext = Qext - H * F.Qhold
+    fill = u[:nb].copy()
+    purge = F.purge_max * u[nb:] * np.sqrt(V * F.inv_cap)
+    ndot = p * (fill - purge) * F.inv_RT
+    U = sum(F_bag.tolist()) - F.W
+    if sw.separated:
+        Hdot = -H / F.tau
+    else:
+        Hdot = -(F.H0 / F.Tb) * min(U / F.H0, 1.0) if U > 0 else 0.0
+    dx = np.zeros(m2 + nb + 1)
+    acc = None
+    if sw.rates or sw.full:
+        acc = Qext + F.G @ qc - F.om2 * x[:nr] - F.damp * x[nr:m2]
+        dx[:nr] = x[nr:m2]
+        dx[nr:m2] = acc
+    dx[m2 : m2 + nb] = ndot
+    dx[-1] = Hdot
+    return dx, Aux(z, zd, V, p, F_bag, fill, purge, U, qc, active, w_s, acc, None, None, Qext, w_min,
+                   (F, ad, qc, F_bag))
 
 
 def _held_rates(F: Fast, sw, q, n, u, meas=None):
