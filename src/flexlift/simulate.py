@@ -188,6 +188,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     x = P.initial_state()
     u = np.zeros(2 * nb)
     F = Fast(P)
+    ppT = np.ascontiguousarray(F.pp.T)
     x[:nr] = held_state(F, x, sw)
     params = (P, sw, F, {})  # the last: ETD2 matrices of sub-steps, per step length
     sw.noisy = dist.force_noise_N_m > 0
@@ -212,6 +213,8 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
     nsl = slice(m2, m2 + nb)
     closed = ~P.external
     relief = np.where(closed, P.gas.relief, 0.0)
+    cap_RT = P.capacity * (1.0 / F.RT)  # the most gas a bag holds per unit pressure [mol/Pa]
+    relief_RT = relief * cap_RT
     report_every = max(1, n_steps // 100)
     any_sensor_fault = False
     leaking = False
@@ -266,9 +269,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
             sw.noise_s = np.repeat(noise_el, strips_per_el)
         if k % k_ctrl == 0:
             # measurements: what the controllers see
-            q = x[:nr]
-            zm = F.pp @ q
-            zdm = F.pp @ x[nr:m2]
+            zm, zdm = x[:m2].reshape(2, nr) @ ppT  # heights and velocities at the bag points
             pm = F.p_atm + F.rg * np.maximum(F.depth - zm, 0.0)
             Vm = np.minimum(x[nsl] * (F.RT / pm), F.cap)
             sw.meas = (zm, zdm, pm, Vm)  # the dynamics of this state reuse them
@@ -346,8 +347,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
         x += step
         rec.account(aux, dt)
         # spill (open bags) and relief venting (closed bags) at the local pressure
-        n_max = (aux.pressure + relief) * P.capacity * (1.0 / F.RT)
-        over = x[nsl] - n_max
+        over = x[nsl] - (aux.pressure * cap_RT + relief_RT)
         if max(over.tolist()) > 0.0:
             over = np.maximum(over, 0.0)
             rec.vent(over * F.RT / aux.pressure)
