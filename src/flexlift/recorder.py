@@ -32,6 +32,14 @@ class Recorder:
         self.liftoff = False
         self.resettled = False
         self.inv_patm = 1.0 / P.gas.p_atm
+        # static correction of the eliminated modes: their generalised force per unit strip
+        # line load and bag point force, divided by omega^2 (precomputed for _store)
+        nr = P.nr
+        inv_om2 = 1.0 / P.omega2[nr:]
+        self._mdc_line = np.ascontiguousarray((P.psi_s[:, nr:] * P.ws[:, None]).T * inv_om2[:, None])
+        self._mdc_point = np.ascontiguousarray(P.psi_b[:, nr:].T * inv_om2[:, None])
+        self._mdc_weight = P.Q_weight[nr:] * inv_om2
+        self._heave = float(P.psi_s[0, 0])
 
     # ------------------------------------------------------------------ events
     def event(self, t: float, kind: str, bag: str | None, detail: str = "") -> None:
@@ -117,11 +125,12 @@ class Recorder:
         P = self.P
         nb, nr = P.nb, P.nr
         # static (mdc) correction of the eliminated modes at the bag points
-        qs = np.zeros(P.modes.n_modes)
-        qs[:nr] = x[:nr]
         if aux.line is not None:
-            Q = P.psi_s.T @ (P.ws * aux.line) + P.psi_b.T @ aux.point + P.Q_weight
-            qs[nr:] = Q[nr:] / P.omega2[nr:]
+            qs = np.concatenate((x[:nr], self._mdc_line @ aux.line + self._mdc_point @ aux.point
+                                 + self._mdc_weight))
+        else:
+            qs = np.zeros(P.modes.n_modes)
+            qs[:nr] = x[:nr]
         z = P.psi_p @ qs
         theta = P.dpsi_p @ qs
         theta_rate = P.dpsi_p[:, :nr] @ x[nr : 2 * nr]
@@ -143,10 +152,10 @@ class Recorder:
             "gas_volume": aux.volume,
             "lift": aux.bag_force,
             "fill_rate": aux.fill,
-            "purge_opening": np.where(P.external, u[nb:], np.nan).copy(),
+            "purge_opening": np.where(P.external, u[nb:], np.nan),
             "supervisor_output": on_ext(cmd[2]),
             "desired_volume": on_ext(cmd[3]),
-            "heave": float(P.psi_s[0, 0] * x[0]),
+            "heave": float(self._heave * x[0]),
             "pitch": float(x[1] * P.pitch_slope),
             "holding_force": float(x[-1]),
             "uplift": aux.uplift,
