@@ -32,14 +32,23 @@ class Recorder:
         self.liftoff = False
         self.resettled = False
         self.inv_patm = 1.0 / P.gas.p_atm
-        # static correction of the eliminated modes: their generalised force per unit strip
-        # line load and bag point force, divided by omega^2 (precomputed for _store)
-        nr = P.nr
-        inv_om2 = 1.0 / P.omega2[nr:]
-        self._mdc_line = np.ascontiguousarray((P.psi_s[:, nr:] * P.ws[:, None]).T * inv_om2[:, None])
-        self._mdc_point = np.ascontiguousarray(P.psi_b[:, nr:].T * inv_om2[:, None])
-        self._mdc_weight = P.Q_weight[nr:] * inv_om2
-        self._heave = float(P.psi_s[0, 0])
+        self._mdc = None  # see _mdc_matrices
+
+    def _mdc_matrices(self):
+        """Static correction of the eliminated modes: their generalised force per unit strip
+        line load, per unit bag point force and of the weight, divided by omega^2; and the
+        heave displacement per unit coordinate (computed once, for the output rows)."""
+        if self._mdc is None:
+            P = self.P
+            nr = P.nr
+            inv_om2 = 1.0 / P.omega2[nr:]
+            self._mdc = (
+                np.ascontiguousarray((P.psi_s[:, nr:] * P.ws[:, None]).T * inv_om2[:, None]),
+                np.ascontiguousarray(P.psi_b[:, nr:].T * inv_om2[:, None]),
+                P.Q_weight[nr:] * inv_om2,
+                float(P.psi_s[0, 0]),
+            )
+        return self._mdc
 
     # ------------------------------------------------------------------ events
     def event(self, t: float, kind: str, bag: str | None, detail: str = "") -> None:
@@ -125,9 +134,9 @@ class Recorder:
         P = self.P
         nb, nr = P.nb, P.nr
         # static (mdc) correction of the eliminated modes at the bag points
+        mdc_line, mdc_point, mdc_weight, heave = self._mdc_matrices()
         if aux.line is not None:
-            qs = np.concatenate((x[:nr], self._mdc_line @ aux.line + self._mdc_point @ aux.point
-                                 + self._mdc_weight))
+            qs = np.concatenate((x[:nr], mdc_line @ aux.line + mdc_point @ aux.point + mdc_weight))
         else:
             qs = np.zeros(P.modes.n_modes)
             qs[:nr] = x[:nr]
@@ -155,7 +164,7 @@ class Recorder:
             "purge_opening": np.where(P.external, u[nb:], np.nan),
             "supervisor_output": on_ext(cmd[2]),
             "desired_volume": on_ext(cmd[3]),
-            "heave": float(self._heave * x[0]),
+            "heave": float(heave * x[0]),
             "pitch": float(x[1] * P.pitch_slope),
             "holding_force": float(x[-1]),
             "uplift": aux.uplift,
