@@ -111,7 +111,9 @@ class FillTable:
             return ys[0]
         if d != d:
             return d
-        j = min(max(int((d + 1.0) * self._inv_h), 0), self._n - 2)
+        j = int((d + 1.0) * self._inv_h)
+        j = 0 if 0 > j else j
+        j = self._n - 2 if self._n - 2 < j else j
         while j > 0 and xs[j] > d:
             j -= 1
         while xs[j + 1] <= d:
@@ -454,8 +456,12 @@ class Controller:
                 if e != e or r != r:
                     ui = float("nan")
                 else:
-                    se = min(max((e + 1.0) * inv_h, 0.0), top)
-                    sr = min(max((r + 1.0) * inv_h, 0.0), top)
+                    # min(max(., 0), top) as conditional expressions (the same semantics)
+                    se, sr = (e + 1.0) * inv_h, (r + 1.0) * inv_h
+                    se = 0.0 if 0.0 > se else se
+                    se = top if top < se else se
+                    sr = 0.0 if 0.0 > sr else sr
+                    sr = top if top < sr else sr
                     ie, ir = int(se), int(sr)
                     fe, fr = se - ie, sr - ir
                     k = ie * g + ir
@@ -492,7 +498,8 @@ class Controller:
             r = rate[i] + a * ((e - prev[i]) * inv_T - rate[i])
             rate[i] = r
             d = (r + lam * e) * gain
-            f = fill_map(min(max(d, -1.0), 1.0)) * ((e > db) * fmax)
+            d = -1.0 if -1.0 > d else d
+            f = fill_map(1.0 if 1.0 < d else d) * ((e > db) * fmax)
             if purge:
                 excess = -e
                 raw = kp * excess + ki * integ[i]
@@ -501,8 +508,10 @@ class Controller:
                     prev_x[i] = excess
                 on = excess > db or integ[i] > 0.0
                 hold_i = (raw >= 1.0 and excess > 0) or not on
-                integ[i] = max(integ[i] + (0.0 if hold_i else excess * T), 0.0)
-                op = min(max(raw, 0.0), 1.0) * on
+                ii = integ[i] + (0.0 if hold_i else excess * T)
+                integ[i] = 0.0 if 0.0 > ii else ii
+                op = 0.0 if 0.0 > raw else raw
+                op = (1.0 if 1.0 < op else op) * on
                 opening[i] = op
                 f = f * (op <= 0.0)
             fill[i] = f
