@@ -378,7 +378,9 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
                 k_end = min(n_steps, k + 1 + int(min(n_sep, 1e9)) - 2)
                 if fi < n_faults:
                     k_end = min(k_end, int(math.ceil(faults[fi].time_s / dt - 1e-9)) - 1)
-                if k_end > k + 1 and aux.uplift == uplift(F, x, sw):
+                # the uplift must be unchanged by the step (to round-off: a real trickle of
+                # gas is far larger than 1e-12 of the uplift and keeps the loop stepping)
+                if k_end > k + 1 and abs(aux.uplift - uplift(F, x, sw)) <= 1e-12 * abs(aux.uplift):
                     idle_until, idle_dH = k_end, dt * Hdot
         if leaking:
             x[nsl] = np.maximum(x[nsl], 0.0)
