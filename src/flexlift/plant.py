@@ -518,17 +518,3 @@ def etd_matrices(P: Plant, dt: float, active: np.ndarray | None):
     X = expm(dt * A)
     E, P1, P2 = X[:n, :n], X[:n, n : n + nr], X[:n, n + nr :]
     return np.ascontiguousarray(E), np.ascontiguousarray(P1 + P2), np.ascontiguousarray(-P2)
-
-
-def step_matrix(P: Plant, dt: float, active: np.ndarray | None) -> np.ndarray:
-    """(I - dt/2 J)^-1 for the mechanical states, J the Jacobian of modal stiffness, damping
-    and the contact springs active at the strips ``active`` (None: none) [-]."""
-    nr = P.nr
-    K = np.diag(P.omega2[:nr])
-    Cm = np.diag(P.damp[:nr])
-    if active is not None and np.any(active):
-        ps = P.psi_s[:, :nr] * (P.ws * active)[:, None]
-        K = K + P.seabed.stiffness * ps.T @ P.psi_s[:, :nr]
-        Cm = Cm + P.seabed.damping * ps.T @ P.psi_s[:, :nr]
-    J = np.block([[np.zeros((nr, nr)), np.eye(nr)], [-K, -Cm]])
-    return np.linalg.inv(np.eye(2 * nr) - 0.5 * dt * J)

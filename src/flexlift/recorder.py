@@ -93,12 +93,7 @@ class Recorder:
     def sample(self, k, t, x, aux, u, cmd, ext, sw) -> None:
         P = self.P
         if not sw.separated:
-            self.last = (t, x, aux, u, cmd, ext, sw.separated, sw.attached)
-            if k % self.k_out == 0:
-                self._store()
-                self.stored_t = t
-            if k % self.k_str == 0:
-                self._snapshot(t, x, aux, sw)
+            self._keep(k, t, x, aux, u, cmd, ext, sw)
             return
         if sw.intact:  # every sling holds: the largest |zdot| without the array round trips
             v = max(map(abs, aux.zdot.tolist()))
@@ -122,6 +117,10 @@ class Recorder:
             elif self.liftoff and wmin < 0.0:
                 self.resettled = True
                 self.event(t, "resettle", None, "the hull touched the seabed again")
+        self._keep(k, t, x, aux, u, cmd, ext, sw)
+
+    def _keep(self, k, t, x, aux, u, cmd, ext, sw) -> None:
+        """Remember the latest state; store a row and a strength snapshot at their intervals."""
         self.last = (t, x, aux, u, cmd, ext, sw.separated, sw.attached)
         if k % self.k_out == 0:
             self._store()
