@@ -13,25 +13,7 @@ import tracemalloc
 
 import numpy as np
 
-
-def _skfuzzy_sim(fis):
-    import skfuzzy
-    from skfuzzy import control as ctrl
-
-    uni = np.linspace(-1, 1, 201)
-    ants = []
-    for var in fis.inputs:
-        a = ctrl.Antecedent(uni, var.name)
-        for m in var.mfs:
-            a[m.name] = skfuzzy.gaussmf(uni, m.params[1], m.params[0])
-        ants.append(a)
-    out = ctrl.Consequent(fis.output_grid, fis.output.name, defuzzify_method="centroid")
-    for m in fis.output.mfs:
-        out[m.name] = skfuzzy.gaussmf(out.universe, m.params[1], m.params[0])
-    rules = [ctrl.Rule(ants[0][fis.inputs[0].mfs[r.antecedent[0]].name]
-                       & ants[1][fis.inputs[1].mfs[r.antecedent[1]].name],
-                       out[fis.output.mfs[r.consequent].name]) for r in fis.rules]
-    return ctrl.ControlSystemSimulation(ctrl.ControlSystem(rules))
+from flexlift.fis import to_skfuzzy
 
 
 def _per_call(fn, points, repeat=5):
@@ -56,7 +38,7 @@ def run(quick: bool = False) -> dict:
     n_sk = 5 if quick else 20
     n_batch = 10_000
     sk_pts = rng.uniform(-1, 1, (n_sk, 2))
-    sim = _skfuzzy_sim(fis)
+    sim = to_skfuzzy(fis)[0]
 
     def sk(p):
         sim.input["e"], sim.input["edot"] = p[0], p[1]

@@ -121,3 +121,15 @@ def test_bad_files_raise_one_line(text, match):
 def test_missing_file(tmp_path):
     with pytest.raises(InputError, match="readable"):
         read_fis(tmp_path / "nope.fis")
+
+
+def test_to_skfuzzy_refuses_what_scikit_fuzzy_cannot_mirror():
+    from flexlift.fis import to_skfuzzy
+    from flexlift.rulebase import fill_fis, supervisor_fis
+
+    sim, out = to_skfuzzy(supervisor_fis())
+    sim.input["e"], sim.input["edot"] = 0.3, -0.2
+    sim.compute()
+    assert abs(sim.output[out.label] - supervisor_fis(defuzzification="centroid_trapz")((0.3, -0.2))) < 1e-3
+    with pytest.raises(InputError, match="Gaussian sets only"):
+        to_skfuzzy(fill_fis().fis)  # triangular sets

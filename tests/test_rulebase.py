@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 import skfuzzy
-from skfuzzy import control as ctrl
 
 from flexlift.errors import InputError
+from flexlift.fis import to_skfuzzy
 from flexlift.rulebase import LABELS, SUPERVISOR_TABLE, fill_fis, supervisor_fis
 
 
@@ -78,29 +78,12 @@ def test_monotone_along_the_diagonal(fis):
     assert diag[0] < -0.85 and diag[-1] > 0.85
 
 
-def _skfuzzy_system(fis, points):
-    """scikit-fuzzy's ControlSystem with the same sets and rules; the antecedent universes
-    contain the test points, so its interpolated input memberships are exact there."""
-    uni = np.union1d(np.linspace(-1, 1, 201), points.ravel())
-    ants = []
-    for var in fis.inputs:
-        a = ctrl.Antecedent(uni, var.name)
-        for m in var.mfs:
-            a[m.name] = skfuzzy.gaussmf(uni, m.params[1], m.params[0])
-        ants.append(a)
-    out = ctrl.Consequent(fis.output_grid, fis.output.name, defuzzify_method="centroid")
-    for m in fis.output.mfs:
-        out[m.name] = skfuzzy.gaussmf(out.universe, m.params[1], m.params[0])
-    rules = [ctrl.Rule(ants[0][LABELS[r.antecedent[0]]] & ants[1][LABELS[r.antecedent[1]]],
-                       out[LABELS[r.consequent]]) for r in fis.rules]
-    return ctrl.ControlSystemSimulation(ctrl.ControlSystem(rules)), out  # distinct points
-
-
 def test_agrees_with_scikit_fuzzy_control_system(fis):
     from skfuzzy.control.controlsystem import CrispValueCalculator
 
     pts = np.random.default_rng(5).uniform(-1, 1, (40, 2))
-    sim, out = _skfuzzy_system(fis, pts)
+    # the antecedent universe holds the test points: scikit-fuzzy's memberships exact there
+    sim, out = to_skfuzzy(fis, np.union1d(np.linspace(-1, 1, 201), pts.ravel()))
     ours = fis.aggregate(pts)
     trapz = fis.with_options(defuzzification="centroid_trapz")(pts)
     y = fis.output_grid

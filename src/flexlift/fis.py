@@ -215,3 +215,42 @@ def _floats(text: str, n: int, line: str, fail) -> tuple[float, ...]:
         return tuple(float(t) for t in text.replace(",", " ").split())
     except ValueError:
         fail(n, line, "numbers separated by spaces")
+
+
+def to_skfuzzy(fis: FIS, input_universe=None):
+    """The same system as a scikit-fuzzy ``ControlSystemSimulation``, for cross-checks.
+
+    Supported: Gaussian sets, AND rules of weight 1 with every input named, min/max, centroid
+    (scikit-fuzzy's own operators). ``input_universe``: sample points shared by the inputs
+    (default 201 points over the first input's range); include the points you will evaluate
+    so that scikit-fuzzy's interpolated input memberships are exact there. Returns
+    ``(simulation, consequent)``. scikit-fuzzy is a test-only dependency, imported here.
+    """
+    import numpy as np
+    import skfuzzy
+    from skfuzzy import control as ctrl
+
+    if any(m.kind != "gaussmf" for v in (*fis.inputs, fis.output) for m in v.mfs):
+        raise InputError("fis", fis.name, "to_skfuzzy supports Gaussian sets only")
+    if any(r.connective != "and" or r.weight != 1 or any(r.negated) or None in r.antecedent
+           for r in fis.rules):
+        raise InputError("fis", fis.name, "to_skfuzzy supports plain AND rules of weight 1")
+    lo, hi = fis.inputs[0].range
+    uni = np.linspace(lo, hi, 201) if input_universe is None else np.asarray(input_universe)
+    ants = []
+    for var in fis.inputs:
+        a = ctrl.Antecedent(uni, var.name)
+        for m in var.mfs:
+            a[m.name] = skfuzzy.gaussmf(uni, m.params[1], m.params[0])
+        ants.append(a)
+    out = ctrl.Consequent(fis.output_grid, fis.output.name, defuzzify_method="centroid")
+    for m in fis.output.mfs:
+        out[m.name] = skfuzzy.gaussmf(out.universe, m.params[1], m.params[0])
+    rules = []
+    for r in fis.rules:
+        terms = [ants[i][fis.inputs[i].mfs[k].name] for i, k in enumerate(r.antecedent)]
+        condition = terms[0]
+        for term in terms[1:]:
+            condition = condition & term
+        rules.append(ctrl.Rule(condition, out[fis.output.mfs[r.consequent].name]))
+    return ctrl.ControlSystemSimulation(ctrl.ControlSystem(rules)), out
