@@ -150,3 +150,28 @@ def test_fill_map_monotone_zero_below_and_full_at_one():
     np.testing.assert_array_equal(fill(d[:, None]), v)
     with pytest.raises(InputError):
         fill(np.array([0.1, np.nan]))
+
+
+def test_fill_map_monotone_by_construction_whatever_the_rounding():
+    # a centroid computed on another CPU may wiggle by 1e-16 (issue 10: -1.1e-16 steps on a
+    # fresh install); the map must stay monotone whatever the rounding of the exact system
+    exact = fill_fis().fis
+    rng = np.random.default_rng(3)
+
+    def wiggly(x):
+        v = np.asarray(exact(x), dtype=float)
+        return v + 1e-15 * rng.standard_normal(v.shape)
+
+    from flexlift.rulebase import FillMap
+
+    fill = FillMap(wiggly)
+    d = np.linspace(-1.5, 1.5, 30001)
+    assert np.all(np.diff(fill(d)) >= 0.0)
+    assert fill(0.0) == 0.0 and fill(1.0) == 1.0
+
+
+def test_fill_map_table_is_the_exact_centroid_to_1e4():
+    fill = fill_fis()
+    d = np.random.default_rng(4).uniform(0.0, 1.0, 500)
+    exact = np.maximum(fill.fis(d), 0.0) / fill.fis(1.0)
+    assert np.max(np.abs(fill(d) - exact)) < 1e-4

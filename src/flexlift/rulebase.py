@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from flexlift.errors import InputError
 from flexlift.fuzzy import FIS, MF, Rule, Variable
 
 LABELS = ("NB", "NM", "NS", "ZE", "PS", "PM", "PB")
@@ -39,7 +40,6 @@ SUPERVISOR_TABLE: dict[str, tuple[str, ...]] = {
 #: the SIFSMC map: each distance set to its fill set (odd, monotone; clipped at zero below)
 FILL_MAP: dict[str, str] = {label: label for label in LABELS}
 
-_ROUNDING = 1e-12  # fill fractions below this are rounding noise of a symmetric centroid
 SPACING = 2.0 / (len(LABELS) - 1)  # 1/3
 SIGMA = SPACING / (2.0 * math.sqrt(2.0 * math.log(2.0)))  # neighbours cross at 0.5
 
@@ -90,23 +90,37 @@ class FillMap:
     ``fis`` is the one-input Mamdani system: seven triangular sets (a partition of unity) on
     the normalised signed distance d in [-1, 1] mapped one-to-one to seven triangular sets on
     v in [-1, 1], centroid on 101 points: an odd, monotone, nearly linear map. The fill
-    fraction is max(v, 0) / v(1), so it is exactly 0 for d <= 0 (no filling when the bag has
-    the volume it should; purging is the secondary controller's job), 1 at d = 1 and beyond.
+    fraction is max(v, 0) / v(1): exactly 0 for d <= 0 (no filling when the bag has the volume
+    it should; purging is the secondary controller's job), 1 at d = 1 and beyond.
+
+    The map is monotone by construction, not by luck of rounding: the centroid is sampled once
+    at ``points`` values of d over [0, 1], made non-decreasing (a running maximum removes the
+    1e-16 wiggles a floating-point centroid can have) and interpolated linearly, which keeps it
+    monotone. It differs from the exact centroid by less than 1e-4 of full scale (tested).
     ``fill(x)``: x a scalar, shape (n,) or (n, 1); returns a float or an array (n,).
     """
 
     fis: FIS
-    full: float = field(init=False)  # v(1), the raw output that means a full fill
+    points: int = 4001
+    d: np.ndarray = field(init=False, repr=False)  # sample points over [0, 1]
+    v: np.ndarray = field(init=False, repr=False)  # fill fractions there, non-decreasing
 
     def __post_init__(self):
-        object.__setattr__(self, "full", float(self.fis(1.0)))
+        d = np.linspace(0.0, 1.0, self.points)
+        raw = np.asarray(self.fis(d), dtype=float) / float(self.fis(1.0))
+        v = np.clip(np.maximum.accumulate(raw), 0.0, 1.0)
+        v[0], v[-1] = 0.0, 1.0  # d = 0 gives a centroid of +-1e-17: that is no fill
+        object.__setattr__(self, "d", d)
+        object.__setattr__(self, "v", v)
 
     def __call__(self, x):
-        v = self.fis(x) / self.full
-        # d = 0 gives a centroid of +-1e-17 (rounding of a symmetric curve): that is no fill
-        if isinstance(v, np.ndarray):
-            return np.where(v < _ROUNDING, 0.0, np.minimum(v, 1.0))
-        return 0.0 if v < _ROUNDING else min(v, 1.0)
+        arr = np.asarray(x, dtype=float)
+        if arr.ndim == 2 and arr.shape[1] == 1:
+            arr = arr[:, 0]
+        if np.isnan(arr).any():
+            raise InputError("fill map input", "nan", "the signed distance d must be a number")
+        out = np.interp(arr, self.d, self.v)  # 0 below d = 0, 1 above d = 1
+        return float(out) if out.ndim == 0 else out
 
 
 def fill_fis(resolution: int = 101) -> FillMap:
