@@ -81,8 +81,8 @@ def test_scenario_copy_repeats_the_run(tanker_run, tanker):
 
 def test_interrupted_run_leaves_previous_output_intact(tmp_path, monkeypatch):
     out = tmp_path / "tanker"
-    out.mkdir()
-    (out / "report.html").write_text("previous report")
+    assert main(["run", "--out", str(out), "--quiet", "--stages", "modes"]) == 0
+    previous = (out / "report.html").read_text()
     import flexlift.cli.loads as loads_cli
 
     def boom(*a, **k):
@@ -91,7 +91,7 @@ def test_interrupted_run_leaves_previous_output_intact(tmp_path, monkeypatch):
     monkeypatch.setattr(loads_cli, "run_stage", boom)
     rc = main(["run", "--out", str(out), "--quiet", "--stages", "modes,loads"])
     assert rc == 130
-    assert (out / "report.html").read_text() == "previous report"
+    assert (out / "report.html").read_text() == previous
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tanker"]
 
 

@@ -239,21 +239,13 @@ def build_result(rec, error: str | None) -> Result:
 # ---------------------------------------------------------------------- files
 def save_netcdf(result: Result, path) -> Path:
     """Write the dataset as netCDF 3 (scipy engine), atomically; returns the path."""
-    import os
-    import tempfile
+    from flexlift.output.files import atomic_file
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".nc", dir=path.parent)
-    os.close(fd)
-    try:
-        ds = result.dataset.copy()
-        ds["bag_kind"] = ds["bag_kind"].astype("S8")
+    ds = result.dataset.copy()
+    ds["bag_kind"] = ds["bag_kind"].astype("S8")
+    with atomic_file(path, suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="scipy")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path
 
 
@@ -270,7 +262,7 @@ def load_netcdf(path) -> Result:
 def to_csv(result: Result, folder, prefix: str = "simulate") -> list[Path]:
     """Write the time histories (one column per variable and bag, units in the headers) and
     the strength envelopes as CSV under ``folder``; returns the paths."""
-    from flexlift._io import write_text
+    from flexlift.output.files import write_text
 
     ds = result.dataset
     folder = Path(folder)

@@ -5,7 +5,9 @@ Each sub-command lives in its own module ``flexlift.cli.<name>`` exposing
 taking the parsed ``argparse.Namespace`` and returning an exit code).
 
 Exit codes: 0 success, 1 a criterion failed or the numerics failed, 2 bad input (one line on
-stderr naming the field, the value and what is allowed; never a traceback), 130 interrupted.
+stderr naming the field, the value and what is allowed; never a traceback), 130 interrupted
+(Ctrl-C), 143 terminated (SIGTERM). An interrupted or terminated command removes its
+half-built output and leaves the previous one intact.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import signal
 import sys
 
 from flexlift import __version__
@@ -60,18 +63,38 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
+    previous = _terminate_as_interrupt()
     try:
         code = int(args.func(args) or 0)
     except InputError as exc:  # bad input: this one line only, warnings dropped
         sys.stderr.write(f"flexlift {args.command}: error: {exc}\n")
         return 2
-    except KeyboardInterrupt:
-        sys.stderr.write(f"flexlift {args.command}: interrupted; previous output left intact\n")
-        return 130
+    except (KeyboardInterrupt, Terminated) as exc:
+        how = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        sys.stderr.write(f"flexlift {args.command}: {how}; previous output left intact\n")
+        return 143 if isinstance(exc, Terminated) else 130
     finally:
         logging.getLogger("flexlift").removeHandler(held)
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     held.flush_to(sys.stderr)
     return code
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised like KeyboardInterrupt so that a half-built output is cleaned up."""
+
+
+def _terminate_as_interrupt():
+    """Make SIGTERM raise :class:`Terminated` (main thread only); returns the old handler."""
+
+    def handler(signum, frame):
+        raise Terminated()
+
+    try:
+        return signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (e.g. called from a worker): leave it alone
+        return None
 
 
 class _HeldWarnings(logging.Handler):

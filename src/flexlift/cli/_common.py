@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
-from flexlift.errors import InputError
+from flexlift.output import output_folder
 from flexlift.scenario import Scenario, load_scenario
 
 
@@ -84,6 +86,12 @@ def emit_json(obj) -> None:
     sys.stdout.write(to_json(obj) + "\n")
 
 
-def check_out_dir(path: Path | None) -> None:
-    if path is not None and path.exists() and not path.is_dir():
-        raise InputError("--out", str(path), "must be a folder (a file of that name exists)")
+@contextlib.contextmanager
+def writing(out: Path | None, command: str) -> Iterator[Path | None]:
+    """The folder a command writes into: None without ``--out``, else a temporary folder that
+    :func:`flexlift.output.output_folder` swaps in for ``out`` when the block succeeds."""
+    if out is None:
+        yield None
+        return
+    with output_folder(out, command) as tmp:
+        yield tmp

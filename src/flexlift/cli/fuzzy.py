@@ -22,19 +22,19 @@ from pathlib import Path
 
 import numpy as np
 
-from flexlift._io import write_text
 from flexlift.cli._common import (
     add_json_arg,
     add_out_arg,
     add_scenario_arg,
-    check_out_dir,
     emit_json,
     positive_int,
     scenario_from,
+    writing,
 )
 from flexlift.errors import InputError
 from flexlift.fis import read_fis, to_fis_text
 from flexlift.fuzzy import FIS
+from flexlift.output.files import write_text
 from flexlift.outputs import Figure, StageOutput, Table
 from flexlift.rulebase import fill_fis, supervisor_fis_from
 
@@ -210,10 +210,10 @@ def _write(out: Path, fis: FIS, tables: list[Table], builtin: bool) -> list[Figu
 
 
 def _main(args) -> int:
-    check_out_dir(args.out)
     scenario = scenario_from(args)
     if args.eval is None and args.grid is None:
-        res = run_stage(scenario, args.out, fis_file=args.fis)
+        with writing(args.out, "fuzzy") as out:
+            res = run_stage(scenario, out, fis_file=args.fis)
         if args.json:
             emit_json(res.summary)
             return 0
@@ -236,7 +236,8 @@ def _main(args) -> int:
     else:
         result = grid_values(fis, args.grid)
     if args.out is not None:
-        run_stage(scenario, args.out, fis_file=args.fis)
+        with writing(args.out, "fuzzy") as out:
+            run_stage(scenario, out, fis_file=args.fis)
     if args.json:
         emit_json(result)
     elif args.eval is not None:

@@ -11,19 +11,19 @@ import sys
 from pathlib import Path
 
 from flexlift import constants as C
-from flexlift._io import write_text
 from flexlift.cli._common import (
     add_json_arg,
     add_out_arg,
     add_scenario_arg,
-    check_out_dir,
     emit_json,
     scenario_from,
+    writing,
 )
 from flexlift.hull import hull_from_scenario
 from flexlift.liftplan import LiftPlan, plan_lift
 from flexlift.loads import Strength, lift_load_case, strength
 from flexlift.modes import compute_modes
+from flexlift.output.files import write_text
 from flexlift.outputs import Figure, StageOutput, Table
 
 log = logging.getLogger(__name__)
@@ -180,9 +180,9 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
 
 
 def _main(args) -> int:
-    check_out_dir(args.out)
     scenario = scenario_from(args)
-    res = run_stage(scenario, args.out)
+    with writing(args.out, "loads") as out:
+        res = run_stage(scenario, out)
     s = res.summary
     if args.json:
         emit_json(s)

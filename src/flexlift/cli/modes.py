@@ -12,21 +12,21 @@ from pathlib import Path
 
 import numpy as np
 
-from flexlift._io import write_text
 from flexlift.beam import assemble
 from flexlift.cli._common import (
     add_json_arg,
     add_out_arg,
     add_scenario_arg,
-    check_out_dir,
     emit_json,
     positive_int,
     scenario_from,
+    writing,
 )
 from flexlift.convergence import Convergence, convergence_study, is_uniform
 from flexlift.errors import InputError
 from flexlift.hull import hull_from_scenario
 from flexlift.modes import Modes, analytic_free_free_hz, compute_modes, mode_nodes
+from flexlift.output.files import write_text
 from flexlift.outputs import Figure, StageOutput, Table
 
 NAME = "modes"
@@ -204,10 +204,10 @@ def run_stage(
 
 
 def _main(args) -> int:
-    check_out_dir(args.out)
     scenario = scenario_from(args)
-    res = run_stage(scenario, args.out, elements=args.elements, n_modes=args.modes,
-                    solver=args.solver)
+    with writing(args.out, "modes") as out:
+        res = run_stage(scenario, out, elements=args.elements, n_modes=args.modes,
+                        solver=args.solver)
     s = res.summary
     if args.json:
         emit_json(s)

@@ -17,19 +17,19 @@ from pathlib import Path
 
 import numpy as np
 
-from flexlift._io import write_text
 from flexlift.cli._common import (
     add_json_arg,
     add_out_arg,
     add_scenario_arg,
-    check_out_dir,
     emit_json,
     positive_int,
     scenario_from,
+    writing,
 )
 from flexlift.hull import hull_from_scenario
 from flexlift.liftplan import plan_lift
 from flexlift.modes import compute_modes
+from flexlift.output.files import write_text
 from flexlift.outputs import Figure, StageOutput, Table
 from flexlift.reduce import DEFAULT_ORDER, METHODS, Comparison, compare, kept_modes, reduce_all
 from flexlift.statespace import (
@@ -220,9 +220,9 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
 
 
 def _main(args) -> int:
-    check_out_dir(args.out)
     scenario = scenario_from(args)
-    res = run_stage(scenario, args.out, bag=args.bag, order=args.order, output=args.output)
+    with writing(args.out, "reduce") as out:
+        res = run_stage(scenario, out, bag=args.bag, order=args.order, output=args.output)
     s = res.summary
     if args.json:
         emit_json(s)

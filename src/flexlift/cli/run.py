@@ -14,14 +14,8 @@ import typing
 from pathlib import Path
 
 from flexlift import __version__
-from flexlift._io import atomic_dir, write_json, write_text
-from flexlift.cli._common import (
-    add_scenario_arg,
-    check_out_dir,
-    emit_json,
-    scenario_from,
-)
-from flexlift.errors import InputError
+from flexlift.cli._common import add_scenario_arg, emit_json, scenario_from
+from flexlift.output import output_folder, write_json, write_text
 from flexlift.outputs import StageOutput
 from flexlift.report import STAGE_TITLES, render_report
 from flexlift.scenario import ControlMode
@@ -168,18 +162,14 @@ def summary_of(scenario, outputs: list[StageOutput], elapsed_s: float) -> dict:
 def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
     out = args.out if args.out is not None else Path("flexlift-out") / scenario.name
-    check_out_dir(out)
     progress = Progress(quiet=args.quiet)
     t0 = time.perf_counter()
-    try:
-        with atomic_dir(out) as tmp:
-            outputs = run_all(scenario, tmp, args.stages, args.control, progress)
-            summary = summary_of(scenario, outputs, time.perf_counter() - t0)
-            write_text(tmp / "scenario.yaml", scenario.to_yaml())
-            write_json(tmp / "summary.json", summary)
-            write_text(tmp / "report.html", render_report(scenario, outputs))
-    except OSError as exc:  # e.g. a full disk: the previous output is untouched
-        raise InputError("--out", str(out), f"could not write the output ({exc.strerror})") from None
+    with output_folder(out, "run") as tmp:  # refuses folders flexlift did not write
+        outputs = run_all(scenario, tmp, args.stages, args.control, progress)
+        summary = summary_of(scenario, outputs, time.perf_counter() - t0)
+        write_text(tmp / "scenario.yaml", scenario.to_yaml())
+        write_json(tmp / "summary.json", summary)
+        write_text(tmp / "report.html", render_report(scenario, outputs))
     if args.json:
         emit_json(summary)
     if not args.quiet:

@@ -16,10 +16,10 @@ from flexlift.cli._common import (
     add_json_arg,
     add_out_arg,
     add_scenario_arg,
-    check_out_dir,
     emit_json,
     positive_float,
     scenario_from,
+    writing,
 )
 from flexlift.errors import SimulationError
 from flexlift.outputs import Figure, StageOutput, Table
@@ -115,8 +115,9 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
 
 def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
-    check_out_dir(args.out)
-    out = run_stage(scenario, args.out, control=args.control, duration=args.duration, primary=True)
+    with writing(args.out, "simulate") as folder:
+        out = run_stage(scenario, folder, control=args.control, duration=args.duration,
+                        primary=True)
     s = out.summary
     if args.json:
         emit_json(s)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -36,16 +35,12 @@ def new_figure(nrows: int = 1, ncols: int = 1, **kw):
 
 def save(fig, path: str | os.PathLike) -> Path:
     """Save ``fig`` as PNG atomically and close it; returns the path."""
+    from flexlift.output.files import atomic_file
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".png", dir=path.parent)
-    os.close(fd)
     try:
-        with plt.rc_context(STYLE):
+        with atomic_file(path, suffix=".png") as tmp, plt.rc_context(STYLE):
             fig.savefig(tmp, format="png")
-        os.replace(tmp, path)
     finally:
         plt.close(fig)
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path
