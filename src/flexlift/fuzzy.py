@@ -50,7 +50,6 @@ from flexlift.errors import InputError
 from flexlift.fuzzy_engine import (
     aggregate,
     compile_fis,
-    defuzzify,
     evaluate,
     fire,
     single_point,
@@ -321,10 +320,6 @@ class FIS:
             u = u[:, 0]
             return float(u[0]) if single else u
         return u[0] if single else u
-
-    def defuzzify(self, agg: np.ndarray, output: int = 0) -> np.ndarray:
-        """Defuzzify aggregated curves (n, resolution) of Mamdani output ``output``."""
-        return defuzzify(np.atleast_2d(agg), self._compiled.plans[output], self.defuzzification)
 
     def surface(self, grid: int = 81, refine: int = 4) -> Surface:
         """A precomputed ``grid`` x ``grid`` table with bilinear interpolation (two inputs, one
