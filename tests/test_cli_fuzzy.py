@@ -1,6 +1,7 @@
 """`flexlift fuzzy`: JSON grid and point evaluation, files, .fis input, bad input."""
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -112,3 +113,64 @@ def test_entry_point_subprocess():
     exe = [str(flexlift), "fuzzy", "--eval", "0.3,nan", "--json"]
     r = subprocess.run(exe, capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and r.stdout == "" and r.stderr.count("\n") == 1
+
+
+CORPUS = Path(__file__).parent / "data" / "fis"
+
+
+def test_any_real_fis_file(tmp_path, capsys):
+    tipper = str(CORPUS / "matlab" / "tipper.fis")  # MATLAB's file as shipped, comment first
+    assert _json(capsys, ["fuzzy", "--fis", tipper, "--eval", "2,1", "--json"])["u"] == \
+        pytest.approx(7.0169, abs=5e-5)
+    two = str(CORPUS / "matlab" / "shower.fis")  # two outputs
+    d = _json(capsys, ["fuzzy", "--fis", two, "--eval=-5,0.2", "--json"])
+    assert len(d["u"]) == 2
+    g = _json(capsys, ["fuzzy", "--fis", two, "--grid", "3", "--json"])
+    assert np.array(g["u"]).shape == (3, 3, 2)  # u[i][j] at (ze[i], w[j]), both outputs
+    assert g["u"][2][0] == pytest.approx(
+        _json(capsys, ["fuzzy", "--fis", two, "--eval", "20,-1", "--json"])["u"], rel=1e-14)
+    s = _json(capsys, ["fuzzy", "--fis", two, "--json"])
+    assert [o["name"] for o in s["outputs"]] == ["cold", "hot"] and "surface" not in s
+    seven = str(CORPUS / "matlab" / "slcpp1.fis")  # Sugeno, seven inputs
+    d = _json(capsys, ["fuzzy", "--fis", seven, "--eval", "0,0,0,0,0,0,1", "--json"])
+    from flexlift.fis import read_fis
+    assert d["u"] == read_fis(seven)([0, 0, 0, 0, 0, 0, 1])
+    assert main(["fuzzy", "--fis", seven, "--out", str(tmp_path / "o")]) == 0
+    assert "sugeno, 7 inputs, 1 output" in capsys.readouterr().out
+    assert sorted(f.name for f in (tmp_path / "o" / "figures").iterdir()) == ["fuzzy_memberships.png"]
+    assert read_fis(tmp_path / "o" / "fuzzy_supervisor.fis") == read_fis(seven)
+    assert (tmp_path / "o" / "tables" / "fuzzy_rules.csv").read_text().count("\n") == 12
+
+
+def test_extrapolate_as_matlab(tmp_path, capsys):
+    path = tmp_path / "narrow.fis"
+    path.write_text("[System]\nName='n'\nType='mamdani'\nNumInputs=1\nNumOutputs=1\n"
+                    "[Input1]\nName='x'\nRange=[0 1]\nNumMFs=1\nMF1='top':'trimf',[0.5 1 1]\n"
+                    "[Output1]\nName='y'\nRange=[0 4]\nNumMFs=1\nMF1='hi':'trimf',[2 4 4]\n"
+                    "[Rules]\n1, 1 (1) : 1\n")
+    clipped = _json(capsys, ["fuzzy", "--fis", str(path), "--eval", "1.5", "--json"])["u"]
+    matlab = _json(capsys, ["fuzzy", "--fis", str(path), "--eval", "1.5", "--json",
+                            "--extrapolate"])["u"]
+    assert matlab == 2.0 and clipped > 3.0  # MATLAB: no rule fires beyond the set, mid-range
+
+
+@pytest.mark.parametrize(
+    "name, argv, match",
+    [("octave/investment_portfolio.fis", [], "investment_portfolio.fis line 32: .*einstein_product"),
+     ("fuzzylite/mamdani/Laundry.fis", ["--eval", "1,1"], "Laundry.fis line 20: .*discretemf"),
+     ("matlab/slcpp1.fis", ["--eval", "1,2"], "7 comma-separated numbers, one per input"),
+     ("matlab/mam22.fis", ["--grid", "4", "--eval", "1,1"], "not allowed with")],
+)
+def test_files_flexlift_cannot_use_exit_2_with_one_line(name, argv, match, capsys):
+    try:
+        code = main(["fuzzy", "--fis", str(CORPUS / name), *argv])
+    except SystemExit as exc:
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert re.search(match, err), err
+
+
+def test_a_grid_needs_two_inputs(capsys):
+    code = main(["fuzzy", "--fis", str(CORPUS / "matlab" / "slcpp1.fis"), "--grid", "3"])
+    assert code == 2 and "needs a two-input system; this one has 7" in capsys.readouterr().err

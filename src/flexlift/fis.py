@@ -1,49 +1,37 @@
-"""Import and export of MATLAB ``.fis`` files (Fuzzy Logic Toolbox text format, Mamdani).
+"""Import and export of MATLAB ``.fis`` files (Fuzzy Logic Toolbox text format).
 
-A ``.fis`` file has the sections ``[System]``, ``[Input1]``.. ``[InputN]``, ``[Output1]`` and
-``[Rules]``; membership functions are written ``MF1='name':'type',[p1 p2 ...]`` and rules
-``i1 i2 ..., o (weight) : connective`` with 1-based set indices, 0 = "don't care", a negative
-index = NOT, connective 1 = AND, 2 = OR.
+A ``.fis`` file has the sections ``[System]``, ``[Input1]``.. ``[InputN]``, ``[Output1]``..
+``[OutputM]`` and ``[Rules]``; membership functions are written ``MF1='name':'type',[p1 p2 ...]``
+and rules ``i1 .. iN, o1 .. oM (weight) : connective`` with 1-based set indices, 0 = "don't
+care" (in an antecedent) or "not in this rule" (in a consequent), a negative index = NOT,
+connective 1 = AND, 2 = OR.
 
-Supported: Mamdani systems with one output and the membership function types of
-:mod:`flexlift.fuzzy` (gaussmf, gauss2mf, trimf, trapmf, gbellmf, sigmf). Anything else
-(Sugeno, several outputs, another type, a rule naming a missing set) raises InputError with
-one line naming the file, the line and what is allowed. The output grid size is not part of
-the format (MATLAB sets it at evaluation): pass ``resolution`` (default 101, as MATLAB).
-Numbers are written with Python's shortest round-trip repr, so write -> read is exact.
+Import (:func:`read_fis`, :func:`from_fis_text`) reads what MATLAB's ``readfis`` reads:
+Mamdani and Sugeno systems, any number of inputs and outputs, every membership function type
+of the Fuzzy Logic Toolbox, comments, both the old and the current header; the details are
+in :mod:`flexlift.fis_parse`. What flexlift cannot evaluate (a custom operator or membership
+function, a hedge, another system type) and every malformed line raise InputError with one
+line naming the file, the line and what is allowed. The output grid size is not part of the
+format (MATLAB sets it at evaluation): pass ``resolution`` (default 101, as MATLAB); nor is
+the handling of inputs beyond their ranges: ``out_of_range`` (see :mod:`flexlift.fuzzy`).
+
+Export (:func:`to_fis_text`, :func:`write_fis`) writes the current format (``Version=2.0``)
+with Python's shortest round-trip repr of every number, so write -> read gives back an equal
+FIS, bit for bit. :func:`load_controller_fis` reads a file for one of flexlift's controllers.
 """
 
 from __future__ import annotations
 
 import os
-import re
+from dataclasses import replace
 from pathlib import Path
 
-from flexlift._io import write_text
+from flexlift.output.files import write_text
 from flexlift.errors import InputError
-from flexlift.fuzzy import (
-    AGGREGATIONS,
-    AND_METHODS,
-    DEFUZZIFICATIONS,
-    FIS,
-    IMPLICATIONS,
-    MF,
-    MF_KINDS,
-    OR_METHODS,
-    Rule,
-    Variable,
-)
+from flexlift.fis_parse import METHODS, parse_fis
+from flexlift.fuzzy import FIS, MF
 
-_METHODS = {
-    "AndMethod": ("and_method", AND_METHODS),
-    "OrMethod": ("or_method", OR_METHODS),
-    "ImpMethod": ("implication", IMPLICATIONS),
-    "AggMethod": ("aggregation", AGGREGATIONS),
-    "DefuzzMethod": ("defuzzification", DEFUZZIFICATIONS),
-}
-_MF_LINE = re.compile(r"^'(?P<name>[^']*)'\s*:\s*'(?P<kind>[^']*)'\s*,\s*\[(?P<params>[^\]]*)\]$")
-_RULE_LINE = re.compile(
-    r"^(?P<ante>[-+\d.\s]+),(?P<cons>[-+\d.\s]+)\((?P<weight>[^)]*)\)\s*:\s*(?P<conn>\d+)$")
+ROLES = ("supervisor", "fill")
 
 
 def _num(v: float) -> str:
@@ -51,23 +39,26 @@ def _num(v: float) -> str:
     return text[:-2] if text.endswith(".0") else text
 
 
+def _index(i, negated) -> str:
+    return "0" if i is None else str((-1 if negated else 1) * (i + 1))
+
+
 def to_fis_text(fis: FIS) -> str:
-    """The MATLAB ``.fis`` text of a one-output Mamdani ``fis``."""
-    inv = {v[0]: k for k, v in _METHODS.items()}
-    lines = ["[System]", f"Name='{fis.name}'", "Type='mamdani'", "Version=2.0",
-             f"NumInputs={fis.n_inputs}", "NumOutputs=1", f"NumRules={len(fis.rules)}"]
-    lines += [f"{inv[attr]}='{getattr(fis, attr)}'" for attr in inv]
+    """The MATLAB ``.fis`` text of ``fis`` (Mamdani or Sugeno, any number of outputs)."""
+    lines = ["[System]", f"Name='{fis.name}'", f"Type='{fis.kind}'", "Version=2.0",
+             f"NumInputs={fis.n_inputs}", f"NumOutputs={fis.n_outputs}",
+             f"NumRules={len(fis.rules)}"]
+    lines += [f"{key}='{getattr(fis, attr)}'" for key, (attr, _) in METHODS.items()]
     for title, var in [*((f"Input{i}", v) for i, v in enumerate(fis.inputs, 1)),
-                       ("Output1", fis.output)]:
+                       *((f"Output{i}", v) for i, v in enumerate(fis.outputs, 1))]:
         lines += ["", f"[{title}]", f"Name='{var.name}'",
                   f"Range=[{_num(var.range[0])} {_num(var.range[1])}]", f"NumMFs={len(var.mfs)}"]
         lines += [f"MF{k}='{m.name}':'{m.kind}',[{' '.join(_num(p) for p in m.params)}]"
                   for k, m in enumerate(var.mfs, 1)]
     lines += ["", "[Rules]"]
     for r in fis.rules:
-        ante = " ".join("0" if i is None else str((-1 if n else 1) * (i + 1))
-                        for i, n in zip(r.antecedent, r.negated))
-        cons = (-1 if r.consequent_negated else 1) * (r.consequent + 1)
+        ante = " ".join(_index(i, n) for i, n in zip(r.antecedent, r.negated))
+        cons = " ".join(_index(i, n) for i, n in zip(r.consequents, r.consequents_negated))
         lines.append(f"{ante}, {cons} ({_num(r.weight)}) : {1 if r.connective == 'and' else 2}")
     return "\n".join(lines) + "\n"
 
@@ -77,144 +68,58 @@ def write_fis(fis: FIS, path: str | os.PathLike) -> Path:
     return write_text(path, to_fis_text(fis))
 
 
-def read_fis(path: str | os.PathLike, resolution: int = 101) -> FIS:
-    """Read a MATLAB ``.fis`` file (Mamdani, one output) into a :class:`FIS`."""
+def read_fis(path: str | os.PathLike, resolution: int = 101, out_of_range: str = "clip") -> FIS:
+    """Read a MATLAB ``.fis`` file into a :class:`FIS`."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise InputError("--fis", str(path), f"a readable .fis file ({exc.strerror})") from None
-    return from_fis_text(text, resolution=resolution, source=path.name)
+    return from_fis_text(text, resolution=resolution, source=path.name, out_of_range=out_of_range)
 
 
-def from_fis_text(text: str, resolution: int = 101, source: str = ".fis") -> FIS:
+def from_fis_text(text: str, resolution: int = 101, source: str = ".fis",
+                  out_of_range: str = "clip") -> FIS:
     """Parse MATLAB ``.fis`` text; ``source`` names it in error messages."""
-    sections: dict[str, list[tuple[int, str]]] = {}
-    current = None
-    for n, raw in enumerate(text.splitlines(), 1):
-        line = raw.strip()
-        if not line:
-            continue
-        if line.startswith("[") and line.endswith("]"):
-            current = line[1:-1].strip()
-            if current in sections:
-                raise InputError(f"{source} line {n}", line, "each section appears once")
-            sections[current] = []
-        elif current is None:
-            raise InputError(f"{source} line {n}", line, "content must follow a [Section] header")
-        else:
-            sections[current].append((n, line))
-
-    def fail(n, line, allowed):
-        raise InputError(f"{source} line {n}", line, allowed)
-
-    def keys(name):
-        if name not in sections:
-            raise InputError(source, f"no [{name}] section",
-                             "a Mamdani .fis needs [System], [Input1..N], [Output1], [Rules]")
-        out = {}
-        for n, line in sections[name]:
-            key, eq, value = line.partition("=")
-            if not eq:
-                fail(n, line, "Key=value lines in this section")
-            out[key.strip()] = (n, value.strip())
-        return out
-
-    def string(d, key, where):
-        if key not in d:
-            raise InputError(source, f"[{where}] without {key}", f"[{where}] needs {key}=...")
-        n, v = d[key]
-        return v[1:-1] if len(v) >= 2 and v[0] == v[-1] == "'" else v
-
-    def integer(d, key, where):
-        v = string(d, key, where)
-        try:
-            return int(v)
-        except ValueError:
-            fail(d[key][0], f"{key}={v}", f"{key} must be a whole number")
-
-    system = keys("System")
-    kind = string(system, "Type", "System").lower()
-    if kind != "mamdani":
-        fail(system["Type"][0], f"Type='{kind}'", "only Mamdani systems are supported")
-    n_in, n_out = integer(system, "NumInputs", "System"), integer(system, "NumOutputs", "System")
-    if n_out != 1:
-        fail(system["NumOutputs"][0], f"NumOutputs={n_out}", "only one output is supported")
-    options = {}
-    for key, (attr, allowed) in _METHODS.items():
-        if key in system:
-            value = string(system, key, "System")
-            if value not in allowed:
-                fail(system[key][0], f"{key}='{value}'", f"{key} allowed: {', '.join(allowed)}")
-            options[attr] = value
-
-    def variable(title):
-        d = keys(title)
-        name = string(d, "Name", title)
-        n_r, rng = d.get("Range", (0, ""))
-        nums = _floats(rng.strip("[]"), n_r, f"Range={rng}", fail)
-        if len(nums) != 2:
-            fail(n_r, f"Range={rng}", f"[{title}] needs Range=[lo hi]")
-        count = integer(d, "NumMFs", title)
-        mfs = []
-        for k in range(1, count + 1):
-            if f"MF{k}" not in d:
-                raise InputError(source, f"[{title}] without MF{k}", f"NumMFs={count} sets")
-            n, spec = d[f"MF{k}"]
-            m = _MF_LINE.match(spec)
-            if not m:
-                fail(n, f"MF{k}={spec}", "MFk='name':'type',[p1 p2 ...]")
-            if m["kind"] not in MF_KINDS:
-                fail(n, f"MF{k}={spec}", f"membership types allowed: {', '.join(MF_KINDS)}")
-            try:
-                mfs.append(MF(m["name"], m["kind"], _floats(m["params"], n, spec, fail)))
-            except InputError as exc:
-                fail(n, f"MF{k}={spec}", str(exc))
-        try:
-            return Variable(name, tuple(nums), tuple(mfs))
-        except InputError as exc:
-            fail(n_r, f"[{title}]", str(exc))
-
-    inputs = tuple(variable(f"Input{i}") for i in range(1, n_in + 1))
-    output = variable("Output1")
-    rules = []
-    for n, line in sections.get("Rules", []):
-        m = _RULE_LINE.match(line)
-        if not m:
-            fail(n, line, "rules are written 'i1 i2 ..., o (weight) : 1|2'")
-        ante = _floats(m["ante"], n, line, fail)
-        cons = _floats(m["cons"], n, line, fail)
-        if len(ante) != n_in or len(cons) != 1 or any(v != int(v) for v in (*ante, *cons)):
-            fail(n, line, f"{n_in} whole-number antecedent indices and 1 consequent index")
-        for v, var in zip(ante, inputs):
-            if abs(v) > len(var.mfs):
-                fail(n, line, f"input {var.name!r} has sets 1..{len(var.mfs)} (0 = any)")
-        if not 1 <= abs(cons[0]) <= len(output.mfs):
-            fail(n, line, f"output {output.name!r} has sets 1..{len(output.mfs)}")
-        if m["conn"] not in ("1", "2"):
-            fail(n, line, "connective 1 (AND) or 2 (OR)")
-        weight = _floats(m["weight"], n, line, fail)
-        if len(weight) != 1 or not 0 <= weight[0] <= 1:
-            fail(n, line, "a rule weight between 0 and 1 in parentheses")
-        rules.append(Rule(tuple(None if v == 0 else int(abs(v)) - 1 for v in ante),
-                          int(abs(cons[0])) - 1, weight=weight[0],
-                          connective="and" if m["conn"] == "1" else "or",
-                          negated=tuple(v < 0 for v in ante), consequent_negated=cons[0] < 0))
-    if "NumRules" in system and integer(system, "NumRules", "System") != len(rules):
-        fail(system["NumRules"][0], f"NumRules={integer(system, 'NumRules', 'System')}",
-             f"the [Rules] section has {len(rules)} rules")
-    try:
-        return FIS(string(system, "Name", "System"), inputs, output, tuple(rules),
-                   resolution=resolution, **options)
-    except InputError as exc:
-        raise InputError(source, "system", str(exc)) from None
+    return parse_fis(text, source=source, resolution=resolution, out_of_range=out_of_range)
 
 
-def _floats(text: str, n: int, line: str, fail) -> tuple[float, ...]:
-    try:
-        return tuple(float(t) for t in text.replace(",", " ").split())
-    except ValueError:
-        fail(n, line, "numbers separated by spaces")
+def load_controller_fis(path: str | os.PathLike, role: str, resolution: int = 101) -> FIS:
+    """A user's ``.fis`` file for one of flexlift's fuzzy controllers (SPEC §7).
+
+    role "supervisor": two inputs, the normalised height error ``e`` and its rate ``edot``
+    (matched by name when the file names them so, else taken in order: first e, then edot),
+    and one output ``u`` whose range lies within [-1, 1] (the fraction of ΔV_max).
+    role "fill": one input (the normalised signed distance d) and one output (the fill
+    command). Mamdani or Sugeno. A file that does not fit the role raises InputError.
+    """
+    if role not in ROLES:
+        raise InputError("role", role, f"allowed: {', '.join(ROLES)}")
+    fis = read_fis(path, resolution=resolution)
+    source = Path(path).name
+    want = (2, "two inputs (e, edot)") if role == "supervisor" else (1, "one input (d)")
+    if fis.n_inputs != want[0] or fis.n_outputs != 1:
+        raise InputError(source, f"{fis.n_inputs} inputs and {fis.n_outputs} outputs",
+                         f"a {role} .fis has {want[1]} and one output")
+    if role == "supervisor":
+        names = [v.name for v in fis.inputs]
+        if set(names) == {"e", "edot"} and names[0] != "e":
+            fis = _swapped_inputs(fis)
+        lo, hi = fis.output.range
+        if lo < -1.0 or hi > 1.0:
+            raise InputError(f"{source} output {fis.output.name!r} range", [lo, hi],
+                             "a supervisor's output u lies within [-1, 1] (a fraction of ΔV_max)")
+    return fis
+
+
+def _swapped_inputs(fis: FIS) -> FIS:
+    """The same two-input system with its inputs in the other order."""
+    rules = tuple(replace(r, antecedent=r.antecedent[::-1], negated=r.negated[::-1])
+                  for r in fis.rules)
+    outputs = tuple(replace(v, mfs=tuple(
+        MF(m.name, m.kind, (m.params[1], m.params[0], m.params[2])) if m.kind == "linear" else m
+        for m in v.mfs)) for v in fis.outputs)
+    return replace(fis, inputs=fis.inputs[::-1], outputs=outputs, rules=rules)
 
 
 def to_skfuzzy(fis: FIS, input_universe=None):

@@ -1,16 +1,20 @@
 """``flexlift fuzzy``: the supervisory fuzzy controller (SPEC §7) — draw it, tabulate it,
-evaluate it.
+evaluate it; or any MATLAB ``.fis`` file.
 
 Without ``--fis`` the built-in supervisory system is used, with the operators of the
-scenario's ``control.supervisor`` section; ``--fis FILE`` loads a MATLAB ``.fis`` file
-(Mamdani, one output) instead. Inputs are the normalised error ``ze`` and error rate ``w`` in
-[-1, 1]; values beyond a range are saturated (clipped) to it.
+scenario's ``control.supervisor`` section: inputs the normalised error ``ze`` and error rate
+``w`` in [-1, 1]. ``--fis FILE`` loads a MATLAB ``.fis`` file instead: Mamdani or Sugeno, any
+number of inputs and outputs. Values beyond an input's range are saturated (clipped) to it;
+``--extrapolate`` evaluates the sets there instead, as MATLAB's evalfis does.
 
-  --grid N --json   {"ze": [N], "w": [N], "u": [[N x N]]} with u[i][j] at (ze[i], w[j]),
-                    over each input's range ([-1, 1] for the built-in system)
-  --eval ZE,W       {"u": value} with --json (write --eval=-0.5,0.2 for a negative first value)
-  --out DIR         figures (figures/fuzzy_*.png), tables (tables/fuzzy_*.csv) and the
-                    system as fuzzy_supervisor.fis
+  --grid N --json   {"ze": [N], "w": [N], "u": [[N x N]]} with u[i][j] at (ze[i], w[j]), over
+                    each input's range (two-input systems; with several outputs u[i][j] lists
+                    them)
+  --eval X1,..,XN   {"u": value} with --json, one value per input (a list for several
+                    outputs); write --eval=-0.5,0.2 for a negative first value
+  --out DIR         figures (figures/fuzzy_*.png; the control surface for two-input,
+                    one-output systems), tables (tables/fuzzy_*.csv) and the system as
+                    fuzzy_supervisor.fis
 """
 
 from __future__ import annotations
@@ -63,18 +67,25 @@ def add_parser(sub) -> None:
     what = p.add_mutually_exclusive_group()
     what.add_argument("--grid", type=positive_int("--grid"), default=None,
                       help="tabulate u on an N x N grid of the two inputs")
-    what.add_argument("--eval", type=_eval_point, default=None, metavar="ZE,W",
-                      help="evaluate u at one point of the inputs")
+    what.add_argument("--eval", type=_eval_point, default=None, metavar="X1,..,XN",
+                      help="evaluate the output(s) at one point: one value per input")
+    p.add_argument("--extrapolate", action="store_true",
+                   help="evaluate the sets beyond an input's range, as MATLAB (default: saturate)")
     add_out_arg(p, "figures, tables and the .fis file")
     add_json_arg(p)
     p.set_defaults(func=_main)
 
 
-def load_system(scenario, fis_file: str | Path | None = None) -> FIS:
+def load_system(scenario, fis_file: str | Path | None = None, extrapolate: bool = False) -> FIS:
     """The built-in supervisor with the scenario's operators, or a MATLAB .fis file."""
-    if fis_file is not None:
-        return read_fis(fis_file, resolution=scenario.control.supervisor.resolution)
-    return supervisor_fis_from(scenario.control.supervisor)
+    fis = supervisor_fis_from(scenario.control.supervisor) if fis_file is None else \
+        read_fis(fis_file, resolution=scenario.control.supervisor.resolution)
+    return fis.with_options(out_of_range="extrapolate") if extrapolate else fis
+
+
+def _plain(u):
+    """A float, or a list of floats for several outputs (JSON-ready)."""
+    return u.tolist() if isinstance(u, np.ndarray) else u
 
 
 def grid_values(fis: FIS, n: int) -> dict:
@@ -86,16 +97,18 @@ def grid_values(fis: FIS, n: int) -> dict:
     ze = np.linspace(*fis.inputs[0].range, n)
     w = np.linspace(*fis.inputs[1].range, n)
     P = np.stack(np.meshgrid(ze, w, indexing="ij"), axis=-1).reshape(-1, 2)
-    return {"ze": ze.tolist(), "w": w.tolist(), "u": fis(P).reshape(n, n).tolist()}
+    u = fis(P).reshape(n, n, *([fis.n_outputs] if fis.n_outputs > 1 else []))
+    return {"ze": ze.tolist(), "w": w.tolist(), "u": u.tolist()}
 
 
 def _rule_table(fis: FIS) -> Table:
-    if fis.n_inputs == 2:
+    if fis.n_inputs == 2 and fis.n_outputs == 1:
         a, b = fis.inputs
         cells = [[""] * len(b.mfs) for _ in a.mfs]
         for r in fis.rules:
             i, j = r.antecedent
-            if i is not None and j is not None and not any(r.negated) and r.connective == "and":
+            if i is not None and j is not None and not any(r.negated) and r.connective == "and" \
+                    and r.consequent is not None and not r.consequent_negated:
                 label = fis.output.mfs[r.consequent].name
                 cells[i][j] = f"{cells[i][j]}/{label}" if cells[i][j] else label
         complete = all(all(c) for c in cells) and len(fis.rules) == len(a.mfs) * len(b.mfs)
@@ -110,36 +123,40 @@ def _rule_table(fis: FIS) -> Table:
     for k, r in enumerate(fis.rules, 1):
         parts = [f"{'NOT ' if n else ''}{v.name} is {v.mfs[i].name}"
                  for i, n, v in zip(r.antecedent, r.negated, fis.inputs) if i is not None]
-        then = f"{'NOT ' if r.consequent_negated else ''}{fis.output.mfs[r.consequent].name}"
-        rows.append([k, f" {r.connective.upper()} ".join(parts), then, r.weight])
-    return Table(f"Rules of {fis.name!r}", ["rule", "if", f"then {fis.output.name} is", "weight"],
-                 rows)
+        then = [f"{v.name} is {'NOT ' if n else ''}{v.mfs[i].name}"
+                for i, n, v in zip(r.consequents, r.consequents_negated, fis.outputs)
+                if i is not None]
+        rows.append([k, f" {r.connective.upper()} ".join(parts), ", ".join(then), r.weight])
+    return Table(f"Rules of {fis.name!r}", ["rule", "if", "then", "weight"], rows)
 
 
 def _sets_table(fis: FIS) -> Table:
     rows = [[v.name, m.name, m.kind, " ".join(f"{p:.6g}" for p in m.params)]
-            for v in (*fis.inputs, fis.output) for m in v.mfs]
+            for v in (*fis.inputs, *fis.outputs) for m in v.mfs]
     return Table("Membership functions (MATLAB parameter order)",
                  ["variable", "set", "type", "parameters"], rows)
 
 
 
 def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = None,
-              grid: int = SURFACE_GRID) -> StageOutput:
+              grid: int = SURFACE_GRID, extrapolate: bool = False) -> StageOutput:
     """Build (or load) the supervisory FIS, tabulate its surface, measure the interpolation
     error; figures and tables under ``out`` if given.
 
     fis_file : a MATLAB .fis file instead of the built-in system (default: built-in)
     grid : points per input of the interpolated surface table [-]
+    extrapolate : evaluate the sets beyond the input ranges, as MATLAB (default: saturate)
     """
-    fis = load_system(scenario, fis_file)
+    fis = load_system(scenario, fis_file, extrapolate)
+    outputs = [{"name": v.name, "range": list(v.range), "sets": list(v.labels)}
+               for v in fis.outputs]
     summary: dict = {
         "system": fis.name,
         "source": str(fis_file) if fis_file is not None else "built-in (SPEC §7)",
         "inputs": [{"name": v.name, "range": list(v.range), "sets": list(v.labels)}
                    for v in fis.inputs],
-        "output": {"name": fis.output.name, "range": list(fis.output.range),
-                   "sets": list(fis.output.labels)},
+        **({"output": outputs[0]} if fis.n_outputs == 1 else {"outputs": outputs}),
+        "type": fis.kind,
         "n_rules": len(fis.rules),
         "operators": {k: getattr(fis, k) for k in ("and_method", "or_method", "implication",
                                                    "aggregation", "defuzzification")},
@@ -147,7 +164,7 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
     }
     criteria: dict[str, bool] = {}
     surf = None
-    if fis.n_inputs == 2:
+    if fis.n_inputs == 2 and fis.n_outputs == 1:
         surf = fis.surface(grid=grid)
         lo, hi = np.array([v.range[0] for v in fis.inputs]), np.array([v.range[1] for v in fis.inputs])
         q = np.random.default_rng(1).uniform(lo, hi, (4000, 2))
@@ -183,7 +200,7 @@ def _write(out: Path, fis: FIS, tables: list[Table], builtin: bool) -> list[Figu
     fdir, tdir = out / "figures", out / "tables"
     figures = [Figure(save(plot_memberships(fis), fdir / "fuzzy_memberships.png"),
                       f"Membership functions of the {fis.name} inputs and output.")]
-    if fis.n_inputs == 2:
+    if fis.n_inputs == 2 and fis.n_outputs == 1:
         g = grid_values(fis, PLOT_GRID)
         labels = (fis.inputs[0].name, fis.inputs[1].name, fis.output.name)
         u = np.array(g["u"])
@@ -213,35 +230,42 @@ def _main(args) -> int:
     scenario = scenario_from(args)
     if args.eval is None and args.grid is None:
         with writing(args.out, "fuzzy") as out:
-            res = run_stage(scenario, out, fis_file=args.fis)
+            res = run_stage(scenario, out, fis_file=args.fis, extrapolate=args.extrapolate)
         if args.json:
             emit_json(res.summary)
             return 0
         s = res.summary
         w = sys.stdout.write
-        w(f"{s['system']} ({s['source']}): {len(s['inputs'])} inputs, {s['n_rules']} rules, "
-          f"{'/'.join(s['operators'].values())} on {s['resolution']} points\n")
+        n_out = len(s.get("outputs", [s.get("output")]))
+        grid_note = f" on {s['resolution']} points" if s["type"] == "mamdani" else ""
+        w(f"{s['system']} ({s['source']}): {s['type']}, {len(s['inputs'])} inputs, {n_out} "
+          f"output{'s' if n_out > 1 else ''}, {s['n_rules']} rules, "
+          f"{'/'.join(s['operators'].values())}{grid_note}\n")
         if "surface" in s:
             w(f"  interpolated surface {s['surface']['grid']}x{s['surface']['grid']}: max error "
               f"{s['surface']['max_error']:.2e} (bound {s['surface']['error_bound']:.2e})\n")
         if args.out is not None:
             w(f"  figures and tables written under {args.out}\n")
         return 0
-    fis = load_system(scenario, args.fis)
+    fis = load_system(scenario, args.fis, args.extrapolate)
     if args.eval is not None:
         if len(args.eval) != fis.n_inputs:
             raise InputError("--eval", ",".join(map(str, args.eval)),
-                             f"{fis.n_inputs} comma-separated numbers, one per input")
-        result = {"u": fis(np.array(args.eval)) if fis.n_inputs > 1 else fis(args.eval[0])}
+                             f"{fis.n_inputs} comma-separated numbers, one per input "
+                             f"({', '.join(v.name for v in fis.inputs)})")
+        result = {"u": _plain(fis(np.array(args.eval)) if fis.n_inputs > 1
+                              else fis(args.eval[0]))}
     else:
         result = grid_values(fis, args.grid)
     if args.out is not None:
         with writing(args.out, "fuzzy") as out:
-            run_stage(scenario, out, fis_file=args.fis)
+            run_stage(scenario, out, fis_file=args.fis, extrapolate=args.extrapolate)
     if args.json:
         emit_json(result)
     elif args.eval is not None:
-        sys.stdout.write(f"u = {result['u']:.6g}\n")
+        values = np.atleast_1d(result["u"])
+        sys.stdout.write(", ".join(f"{v.name} = {u:.6g}" for v, u in zip(fis.outputs, values))
+                         + "\n")
     else:
         u = np.array(result["u"])
         sys.stdout.write(f"u on a {args.grid}x{args.grid} grid: min {u.min():.4g}, max "

@@ -11,8 +11,10 @@ from flexlift.plots._style import new_figure
 
 
 def plot_memberships(fis: FIS, samples: int = 401):
-    """The membership functions of every input and of the output, one panel per variable."""
-    variables = [*fis.inputs, fis.output]
+    """The membership functions of every input and output, one panel per variable (a Sugeno
+    system's outputs are functions of the inputs, not sets: not drawn)."""
+    outputs = [] if fis.kind == "sugeno" else list(fis.outputs)
+    variables = [*fis.inputs, *outputs]
     fig, axes = new_figure(len(variables), 1, figsize=(8.0, 1.2 + 1.7 * len(variables)))
     axes = np.atleast_1d(axes)
     for k, (ax, var) in enumerate(zip(axes, variables)):
@@ -26,7 +28,8 @@ def plot_memberships(fis: FIS, samples: int = 401):
         ax.axhline(0.5, color="0.6", lw=0.7, ls=":")
         ax.set_ylim(-0.02, 1.22)
         ax.set_xlim(*var.range)
-        role = "output" if k == len(variables) - 1 else f"input {k + 1}"
+        j = k - len(fis.inputs)
+        role = f"input {k + 1}" if j < 0 else "output" if len(outputs) == 1 else f"output {j + 1}"
         ax.set_ylabel(f"{var.name}\n({role})")
     axes[-1].set_xlabel("normalised value")
     fig.suptitle(f"Membership functions of {fis.name!r} (dotted: membership 0.5)")
