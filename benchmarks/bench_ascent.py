@@ -66,8 +66,8 @@ def _skfuzzy_engines():
 
 
 def run(quick: bool = False) -> dict:
+    from flexlift.ascent import simulate
     from flexlift.scenario import load_scenario
-    from flexlift.simulate import simulate
 
     sc = load_scenario("tanker")
     out: dict = {}

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from flexlift.ascent import simulate
 from flexlift.errors import InputError, SimulationError
 from flexlift.scenario import load_scenario
-from flexlift.simulate import simulate
 
 #: a short ascent (40 m, quick breakout) for the checks that need several runs
 QUICK = {
@@ -166,15 +166,19 @@ def test_unknown_bag_in_fault_is_input_error(quick):
 
 
 def test_numerics_failure_keeps_partial_results(quick, monkeypatch):
-    import flexlift.simulate as S
+    """A state that blows up is caught by the loop's own check: SimulationError, with the
+    results up to that moment kept."""
+    import flexlift.ascent.loop as loop
 
-    real = S.dynamics
+    real = loop.kernel.advance
 
-    def broken(t, x, u, params):
-        dx, aux = real(t, x, u, params)
-        return (dx * np.nan if t > 50.0 else dx), aux
+    def corrupting(A, C, S, R, W, X, rec, k_stop):
+        if R.counters[0] * X.dt > 50.0:
+            R.q[:] = np.nan
+        return real(A, C, S, R, W, X, rec, k_stop)
 
-    monkeypatch.setattr(S, "dynamics", broken)
+    monkeypatch.setattr(loop, "CHUNK_STEPS", 100)
+    monkeypatch.setattr(loop.kernel, "advance", corrupting)
     with pytest.raises(SimulationError, match="numerics failed") as err:
         simulate(quick, duration=200.0)
     part = err.value.partial

@@ -26,10 +26,10 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
-from flexlift.output.files import write_text
 from flexlift.errors import InputError
 from flexlift.fis_parse import METHODS, parse_fis
 from flexlift.fuzzy import FIS, MF
+from flexlift.output.files import write_text
 
 ROLES = ("supervisor", "fill")
 

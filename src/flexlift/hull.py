@@ -91,6 +91,11 @@ class Hull:
         """Structural mass including point masses [kg]."""
         return float(np.sum(self.mass_per_length) * self.element_length + self.point_masses.sum())
 
+    def element_of(self, x) -> np.ndarray:
+        """0-based element holding each position ``x`` [m] (the last for x = L)."""
+        e = np.floor(np.asarray(x, dtype=float) / self.element_length).astype(int)
+        return np.clip(e, 0, self.n_elements - 1)
+
     def nearest_node(self, x: float) -> int:
         """0-based index of the node nearest to position ``x`` [m]."""
         return int(np.clip(np.rint(x / self.element_length), 0, self.n_elements))

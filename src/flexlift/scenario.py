@@ -262,6 +262,8 @@ class Control(_Section):
     ascent_acceleration_m_s2: Pos = 0.002
     breakout_pull_t: NonNeg = 150.0  # extra buoyancy held until the hull lifts off
     volume_deadband_m3: NonNeg = 0.2  # |V_d - V| below this: neither fill nor purge
+    height_integral_gain_m2_s: NonNeg = 0.0  # adapted neutral volume per metre of error [m^3/(m s)]
+    measurement_filter_s: NonNeg = 0.0  # low-pass time constant of the measured height and speed
     supervisor: Supervisor = Supervisor()
     fill: FillControl = FillControl()
     purge: PurgeControl = PurgeControl()

@@ -41,9 +41,9 @@ def add_parser(sub) -> None:
 
 
 def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
+    from flexlift.output.results import save_netcdf, to_csv
     from flexlift.plots import ascent
     from flexlift.plots._style import save
-    from flexlift.results import save_netcdf, to_csv
 
     save_netcdf(result, out / "data" / f"simulate_{mode}.nc")
     if primary:
@@ -68,7 +68,7 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
     ``results.nc`` for the scenario's own control mode or when ``primary``), CSV tables and
     figures under ``out`` when given. A numerics failure still writes the partial results and
     is reported in the summary and warnings."""
-    from flexlift.simulate import simulate
+    from flexlift.ascent import simulate
 
     mode = control or scenario.control.mode
     warnings = []
@@ -91,9 +91,9 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
 
 def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
     """One figure comparing the control modes simulated into ``out`` by :func:`run_stage`."""
+    from flexlift.output.results import load_netcdf
     from flexlift.plots import ascent
     from flexlift.plots._style import save
-    from flexlift.results import load_netcdf
 
     modes = [o.name.split(":", 1)[1] for o in outputs]
     rows = [[m, o.summary["max_pitch_deg"], o.summary["max_ascent_velocity_ms"],

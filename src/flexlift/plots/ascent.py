@@ -1,4 +1,4 @@
-"""Figures of a simulated ascent (take a :class:`~flexlift.results.Result`, return a figure)."""
+"""Figures of a simulated ascent (take a :class:`~flexlift.ascent.result.Result`, return a figure)."""
 
 from __future__ import annotations
 

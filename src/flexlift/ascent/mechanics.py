@@ -1,0 +1,137 @@
+"""The plant's compiled pieces: motion at the bags and strips, the loads from the laws of
+:mod:`flexlift.physics`, and the implicit step of the modal mechanics.
+
+Loads on the structure (up positive) at a state:
+
+- bags: buoyancy rho g V at the bag's point (span for internal bags) minus the bag's drag,
+  times 1 while its sling holds; V from Boyle at the bag's local pressure;
+- strips: hull drag on the velocity relative to the current, the force noise, the released
+  suction of a separated group H_g shape(x) (down), and the seabed contact, one-sided, or
+  tension-capable (bilateral) while the strip's group is held;
+- the wet weight (point masses included), a constant generalised force.
+
+Time step of the mechanics y = [q, q']: q'' = -K q - C q' + b, with K = diag(omega^2) + K_c and
+C = diag(2 zeta omega) + C_c, where K_c, C_c are the contact springs and dampers of the strips
+in contact (implicit, so the stiff seabed penalty is stable at any step) and b every other
+generalised force, extrapolated to mid-step (Adams-Bashforth 2): the trapezoidal rule
+(Newmark's average acceleration, second order, A-stable). The implicit matrix is cached and
+rebuilt only when the set of strips in contact changes, or the step length does.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexlift._jit import jit
+from flexlift.ascent.linalg import matvec, matvec_add
+from flexlift.physics.gas import ambient_pressure, buoyancy, gas_volume
+from flexlift.physics.hydro import drag
+from flexlift.physics.seabed import contact_load, in_contact
+
+
+@jit
+def bag_motion(A, q, v, z, zd):
+    """Heights [m] and vertical speeds [m/s] of the bag points (retained modes), into z, zd."""
+    matvec(A.bag_shape, q, z)
+    matvec(A.bag_shape, v, zd)
+
+
+@jit
+def bag_gas(A, n, z, p, V):
+    """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V."""
+    for i in range(n.size):
+        p[i] = ambient_pressure(z[i], A.water_depth, A.p_atm, A.rho_g)
+        V[i] = gas_volume(n[i], p[i], A.RT, A.capacity[i])
+
+
+@jit
+def bag_forces(A, V, zd, attached, current, point):
+    """Force of every bag on the structure [N], into ``point``: buoyancy minus the bag's drag
+    on its speed relative to the ``current`` [m/s], nothing once its sling is broken."""
+    for i in range(V.size):
+        point[i] = (buoyancy(V[i], A.rho_g) + drag(zd[i] - current, A.bag_drag[i])) * attached[i]
+
+
+@jit
+def strip_loads(A, q, v, H, sep, current, noise, w, wv, line, contact, active):
+    """Strip motion (w [m], wv [m/s]), the explicit line loads (drag, noise, released
+    suction) and the contact line loads [N/m], and which strips are in contact (``active``:
+    their springs go into the implicit step). Returns the lowest strip height [m]."""
+    matvec(A.strip_shape, q, w)
+    matvec(A.strip_shape, v, wv)
+    w_min = np.inf
+    for s in range(w.size):
+        g = A.strip_group[s]
+        held = not sep[g]
+        line[s] = drag(wv[s] - current, A.strip_drag[s]) + noise[s]
+        if not held:
+            line[s] -= H[g] * A.strip_hold[s]
+        contact[s] = contact_load(w[s], wv[s], A.strip_k[s], A.strip_c[s], held)
+        active[s] = held or in_contact(w[s], wv[s], A.strip_k[s], A.strip_c[s])
+        w_min = min(w_min, w[s])
+    return w_min
+
+
+@jit
+def generalised_force(A, line, point, b):
+    """The explicit generalised force [N] into ``b``: strip line loads, bag forces, weight."""
+    b[:] = A.weight_force
+    matvec_add(A.strip_force, line, b)
+    matvec_add(A.bag_force, point, b)
+
+
+@jit
+def contact_matrices(A, active, stiff, damp):
+    """Modal stiffness and damping [per modal coordinate] of the strips in contact."""
+    stiff[:] = 0.0
+    damp[:] = 0.0
+    nr = A.nr
+    for s in range(active.size):
+        if not active[s]:
+            continue
+        for i in range(nr):
+            fi = A.strip_force[i, s]
+            if fi == 0.0:
+                continue
+            for j in range(nr):
+                sj = A.strip_shape[s, j]
+                stiff[i, j] += fi * A.strip_k[s] * sj
+                damp[i, j] += fi * A.strip_c[s] * sj
+
+
+@jit
+def implicit_matrix(A, h, stiff, damp, out):
+    """Inverse of I + h^2/4 K + h/2 C for a step of ``h`` [s], into ``out``."""
+    nr = A.nr
+    M = np.empty((nr, nr))
+    for i in range(nr):
+        for j in range(nr):
+            M[i, j] = 0.25 * h * h * stiff[i, j] + 0.5 * h * damp[i, j]
+        M[i, i] += 1.0 + 0.25 * h * h * A.omega2[i] + 0.5 * h * A.damping[i]
+    out[:] = np.linalg.inv(M)
+
+
+@jit
+def trapezoidal_step(A, q, v, b_mid, h, implicit, stiff, damp, work):
+    """Advance q, q' by ``h`` [s] in place (trapezoidal rule, contact springs implicit, the
+    other forces ``b_mid`` taken at mid-step); ``work`` (nr,) scratch."""
+    nr = A.nr
+    for i in range(nr):  # work = h (b - K q - C v) - h^2/2 K v
+        s = b_mid[i] - A.omega2[i] * q[i] - A.damping[i] * v[i]
+        kv = A.omega2[i] * v[i]
+        for j in range(nr):
+            s -= stiff[i, j] * q[j] + damp[i, j] * v[j]
+            kv += stiff[i, j] * v[j]
+        work[i] = h * s - 0.5 * h * h * kv
+    for i in range(nr):
+        dv = 0.0
+        for j in range(nr):
+            dv += implicit[i, j] * work[j]
+        q[i] += h * v[i] + 0.5 * h * dv
+        v[i] += dv
+
+
+@jit
+def accelerations(A, q, v, b, contact):
+    """Modal accelerations [per modal coordinate] at a state: every load, contact included."""
+    return b + A.strip_force @ contact - A.omega2 * q - A.damping * v

@@ -1,0 +1,307 @@
+"""The plant of the ascent as plain arrays: one form for the coupled hull and the paper's bags.
+
+Both plants are linear modal mechanics loaded by the laws of :mod:`flexlift.physics`:
+
+    q'' + 2 zeta omega q' + omega^2 q = Q(t),   w(x) = sum_j psi_j(x) q_j
+
+with ``nr`` modal coordinates q [m sqrt(kg)], the loads integrated over ``ns`` *strips*
+(quadrature points along the structure, each with a weight in metres) and ``nb`` *bags*
+(points, or spans for internal bags). The seabed's holding force is split into ``ng``
+*holding groups*, each with its own suction H_g, its own separation and its uplift
+U_g = sum of its bags' lift - W_g.
+
+- The coupled plant (:func:`coupled_plant`): the wet hull's rigid heave and pitch plus
+  ``retained_flexible_modes`` flexible modes; strips at Gauss points along the hull; one
+  holding group. Eliminated modes enter the recorded heights and slopes as their static
+  correction (mdc).
+- The paper's plant (:func:`flexlift.ascent.paper.paper_plant`): each external bag on its own
+  4-state model, two modes per bag and no coupling; one strip and one holding group per bag.
+
+:class:`PlantArrays` is what the compiled loop reads; :class:`Plant` adds the names and the
+structure for the results. Units: SI throughout (N, m, s, mol, Pa).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.beam import assemble
+from flexlift.errors import InputError
+from flexlift.hull import Hull, hull_from_scenario
+from flexlift.liftplan import LiftPlan, plan_lift
+from flexlift.modes import Modes, compute_modes
+from flexlift.physics import gas, hydro, seabed
+
+
+class PlantArrays(NamedTuple):
+    """Everything the compiled loop needs about a plant (read only), SI.
+
+    Sizes: nr modal coordinates, nb bags, ns strips, ng holding groups.
+    """
+
+    nr: int
+    nb: int
+    ns: int
+    ng: int
+    omega2: np.ndarray  # (nr,) omega^2 [rad^2/s^2]
+    damping: np.ndarray  # (nr,) 2 zeta omega [1/s]
+    strip_shape: np.ndarray  # (ns, nr) displacement at each strip per unit q [m / (m sqrt kg)]
+    strip_force: np.ndarray  # (nr, ns) generalised force per unit line load at a strip [m]
+    strip_weight: np.ndarray  # (ns,) quadrature weight: a strip's line load times it is a force [m]
+    strip_drag: np.ndarray  # (ns,) 1/2 rho C_D B [kg/m^2]
+    strip_k: np.ndarray  # (ns,) seabed contact stiffness per length [N/m^2]
+    strip_c: np.ndarray  # (ns,) seabed contact damping per length [N s/m^2]
+    strip_group: np.ndarray  # (ns,) holding group of each strip
+    strip_hold: np.ndarray  # (ns,) holding line load per unit H of its group [1/m]
+    hold_force: np.ndarray  # (nr, ng) generalised force per unit H of each group (down) [-]
+    H0: np.ndarray  # (ng,) initial holding force [N]
+    group_weight: np.ndarray  # (ng,) wet weight W_g a group's bags must lift [N]
+    breakout_time: float  # T_b [s]
+    release_time: float  # tau_r [s]
+    bag_shape: np.ndarray  # (nb, nr) displacement at each bag point per unit q
+    bag_slope: np.ndarray  # (nb, nr) slope (local pitch angle) at each bag point per unit q
+    bag_force: np.ndarray  # (nr, nb) generalised force per unit bag force
+    bag_group: np.ndarray  # (nb,) holding group each bag lifts
+    capacity: np.ndarray  # (nb,) bag capacity V_max [m^3]
+    relief: np.ndarray  # (nb,) over-pressure relief setting (0: open bag) [Pa]
+    top_offset: np.ndarray  # (nb,) height of a bag's top above the hull bottom [m]
+    bag_drag: np.ndarray  # (nb,) 1/2 rho C_D,bag A [kg/m]
+    weight_force: np.ndarray  # (nr,) generalised wet weight (point masses included) [N]
+    pitch_row: np.ndarray  # (nr,) hull pitch angle per unit q [rad]
+    heave_row: np.ndarray  # (nr,) heave of the centre of mass per unit q [m]
+    corr_strip: np.ndarray  # (nb, ns) static correction of the heights per unit line load
+    corr_bag: np.ndarray  # (nb, nb) ... per unit bag force
+    corr_weight: np.ndarray  # (nb,) ... of the wet weight [m]
+    slope_strip: np.ndarray  # (nb, ns) static correction of the slopes per unit line load
+    slope_bag: np.ndarray  # (nb, nb) ... per unit bag force
+    slope_weight: np.ndarray  # (nb,) ... of the wet weight [rad]
+    RT: float  # R T of the gas [J/mol]
+    p_atm: float  # [Pa]
+    rho_g: float  # seawater density times gravity [N/m^3]
+    water_depth: float  # [m]
+    purge_max: float  # Q_out,max [m^3/s]
+    liftoff_clearance: float  # the whole structure is clear of the seabed above this [m]
+
+
+@dataclass(frozen=True)
+class Plant:
+    """A plant and what the results need to label it.
+
+    kind : "coupled" or "paper"
+    names, external, x_point, spans : the bags (names, parachute or not, point [m], span or
+        None [m])
+    neutral_volume : (nb,) gas volumes that hold the structure neutral on the seabed [m^3]
+    strip_x : (ns,) strip positions [m]; strip_element : (ns,) the element each lies in
+    hull, modes, plan : the structure (wet modes, all of them) and the lift plan
+    mass_line : added plus entrained mass per length [kg/m]
+    wet_weight : W' [N]
+    hold_stern_bow : (stern_ratio, bow_ratio) of the holding shape
+    """
+
+    kind: str
+    names: tuple[str, ...]
+    external: np.ndarray
+    x_point: np.ndarray
+    spans: tuple
+    neutral_volume: np.ndarray
+    strip_x: np.ndarray
+    strip_element: np.ndarray
+    arrays: PlantArrays
+    hull: Hull
+    modes: Modes
+    plan: LiftPlan
+    mass_line: float
+    wet_weight: float
+    hold_stern_bow: tuple[float, float]
+    gravity: float
+    seawater_density: float
+    steel_density: float
+
+    @property
+    def nb(self) -> int:
+        return len(self.names)
+
+    @property
+    def nr(self) -> int:
+        return self.arrays.nr
+
+    def initial_moles(self) -> np.ndarray:
+        """Gas of every bag at the start [mol]: its neutral volume at the seabed's pressure."""
+        a = self.arrays
+        p = gas.ambient_pressure(0.0, a.water_depth, a.p_atm, a.rho_g)
+        return gas.moles_of(self.neutral_volume, p, a.RT)
+
+
+#: above this many elements the strips no longer follow the elements: a fixed load grid
+FINE_MESH_ELEMENTS = 100
+#: segments of the fixed load grid of fine meshes (two Gauss points each)
+LOAD_SEGMENTS = 200
+
+
+def strip_points(hull: Hull) -> tuple[np.ndarray, np.ndarray]:
+    """Strip positions [m] and quadrature weights [m] along ``hull``: four Gauss-Legendre
+    points per element up to :data:`FINE_MESH_ELEMENTS` elements; beyond, two per segment of
+    an even grid of :data:`LOAD_SEGMENTS` segments, whatever the mesh (the distributed loads
+    are smooth on that scale, and the cost of a step stops growing with the mesh)."""
+    if hull.n_elements <= FINE_MESH_ELEMENTS:
+        n, p = hull.n_elements, 4
+    else:
+        n, p = LOAD_SEGMENTS, 2
+    gp, gw = np.polynomial.legendre.leggauss(p)
+    gp, gw = 0.5 * (gp + 1.0), 0.5 * gw
+    l = hull.length / n
+    e = np.arange(n)
+    return ((e[:, None] + gp[None, :]) * l).ravel(), np.tile(gw * l, n)
+
+
+def slope_at(modes: Modes, x) -> np.ndarray:
+    """Mode slopes dw/dx at x [m] by the Hermite shape functions, shape (len(x), n_modes)."""
+    x = np.atleast_1d(np.asarray(x, dtype=float))
+    hull = modes.hull
+    l = hull.element_length
+    e = np.clip((x / l).astype(int), 0, hull.n_elements - 1)
+    xi = x / l - e
+    dN = np.stack([(-6 * xi + 6 * xi**2) / l, 1 - 4 * xi + 3 * xi**2, (6 * xi - 6 * xi**2) / l,
+                   -2 * xi + 3 * xi**2], axis=-1)
+    dofs = 2 * e[:, None] + np.arange(4)[None, :]
+    return np.einsum("pk,pkm->pm", dN, modes.phi[dofs])
+
+
+def bag_force_shapes(modes: Modes, plan: LiftPlan) -> np.ndarray:
+    """(nb, n_modes): generalised force per unit bag force; an internal bag's force is spread
+    uniformly over its span (the mode shape averaged over it)."""
+    out = modes.shape_at(np.array([b.x for b in plan.bags]))
+    for i, b in enumerate(plan.bags):
+        if b.span is not None:
+            a, c = b.span
+            xm = a + (np.arange(400) + 0.5) * (c - a) / 400
+            out[i] = modes.shape_at(xm).mean(axis=0)
+    return out
+
+
+def gas_constants(scenario) -> dict:
+    """The gas and environment constants of a scenario, SI (bar to Pa)."""
+    env, g = scenario.environment, scenario.gas
+    return dict(RT=gas.molar_energy(env.sea_temperature_K), p_atm=env.atmospheric_pressure_Pa,
+                rho_g=env.seawater_density_kg_m3 * env.gravity_m_s2,
+                water_depth=env.water_depth_m, purge_max=g.purge_rate_max_m3_s)
+
+
+def static_correction(shape_p: np.ndarray, om2_e: np.ndarray, strip_gen: np.ndarray,
+                      bag_gen: np.ndarray, weight_gen: np.ndarray):
+    """The eliminated modes' static (mdc) response at the bag points: per unit strip line
+    load (nb, ns), per unit bag force (nb, nb) and of the weight (nb,), for bag-point shapes
+    ``shape_p`` (nb, ne) of modes with omega^2 ``om2_e`` (ne,), their generalised forces per
+    unit strip load ``strip_gen`` (ne, ns), per unit bag force ``bag_gen`` (ne, nb) and of the
+    weight ``weight_gen`` (ne,)."""
+    scaled = shape_p / om2_e[None, :]
+    return scaled @ strip_gen, scaled @ bag_gen, scaled @ weight_gen
+
+
+def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = None) -> Plant:
+    """The coupled plant of ``scenario``: the wet hull, its bags and one holding group."""
+    env, hy, sim = scenario.environment, scenario.hydro, scenario.simulation
+    hull = hull or hull_from_scenario(scenario)
+    if plan is None:
+        plan = plan_lift(scenario, hull, compute_modes(hull))
+    rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
+    mass_line = (hydro.added_mass_per_length(hull.breadth, rho, hy.added_mass_coefficient)
+                 + hy.entrained_water_t * C.TONNE / hull.length)
+    modes = compute_modes(assemble(hull, extra_mass_per_length=mass_line))
+    nr = min(2 + sim.retained_flexible_modes, modes.n_modes)
+    xs, ws = strip_points(hull)
+    psi_s = modes.shape_at(xs)  # (ns, m)
+    bags = plan.bags
+    nb = len(bags)
+    external = np.array([b.kind == "external" for b in bags])
+    x_point = np.array([b.x for b in bags], dtype=float)
+    psi_p, dpsi_p = modes.shape_at(x_point), slope_at(modes, x_point)
+    psi_b = bag_force_shapes(modes, plan)
+    capacity = np.array([b.capacity for b in bags])
+    rho_s = env.steel_density_kg_m3
+    el = hull.element_of(xs)
+    strip_gen = (psi_s * ws[:, None]).T  # (m, ns)
+    weight_gen = -(strip_gen @ hydro.submerged_weight(hull.mass_per_length[el], g, rho, rho_s)
+                   + modes.displacement.T @ hydro.submerged_weight(hull.point_masses, g, rho, rho_s))
+    sb = scenario.seabed
+    stern, bow = (sb.stern_ratio, sb.bow_ratio) if sb.holding_shape == "linear" else (1.0, 1.0)
+    hold_s = seabed.holding_shape(xs, hull.length, stern, bow)
+    H0 = (scenario.lift.breakout_factor - 1.0) * plan.wet_weight
+    ns = xs.size
+    cs, cb, cw = static_correction(psi_p[:, nr:], modes.omega[nr:] ** 2, strip_gen[nr:],
+                                   psi_b[:, nr:].T, weight_gen[nr:])
+    ss, sbg, sw = static_correction(dpsi_p[:, nr:], modes.omega[nr:] ** 2, strip_gen[nr:],
+                                    psi_b[:, nr:].T, weight_gen[nr:])
+    top = hull.depth + np.where(external, hydro.sphere_diameter(capacity), 0.0)
+    pitch_row = np.zeros(nr)
+    pitch_row[1] = float(slope_at(modes, [0.5 * hull.length])[0, 1])
+    heave_row = np.zeros(nr)
+    heave_row[0] = float(psi_s[0, 0])
+    relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)
+    arrays = PlantArrays(
+        nr=nr, nb=nb, ns=ns, ng=1,
+        omega2=modes.omega[:nr] ** 2, damping=2.0 * scenario.hull.modal_damping * modes.omega[:nr],
+        strip_shape=np.ascontiguousarray(psi_s[:, :nr]),
+        strip_force=np.ascontiguousarray(strip_gen[:nr]), strip_weight=ws,
+        strip_drag=np.full(ns, hydro.drag_coefficient(rho, hy.drag_coefficient, hull.breadth)),
+        strip_k=np.full(ns, sb.contact_stiffness_N_m2), strip_c=np.full(ns, sb.contact_damping_Ns_m2),
+        strip_group=np.zeros(ns, dtype=np.int64), strip_hold=hold_s,
+        hold_force=-(strip_gen[:nr] @ hold_s)[:, None], H0=np.array([H0]),
+        group_weight=np.array([plan.wet_weight]),
+        breakout_time=sb.breakout_time_s, release_time=sb.release_time_s,
+        bag_shape=np.ascontiguousarray(psi_p[:, :nr]), bag_slope=np.ascontiguousarray(dpsi_p[:, :nr]),
+        bag_force=np.ascontiguousarray(psi_b[:, :nr].T), bag_group=np.zeros(nb, dtype=np.int64),
+        capacity=capacity, relief=relief, top_offset=top,
+        bag_drag=np.where(external, hydro.drag_coefficient(
+            rho, hy.bag_drag_coefficient, 1.0) * hydro.sphere_frontal_area(capacity), 0.0),
+        weight_force=weight_gen[:nr].copy(), pitch_row=pitch_row, heave_row=heave_row,
+        corr_strip=cs, corr_bag=cb, corr_weight=cw, slope_strip=ss, slope_bag=sbg, slope_weight=sw,
+        liftoff_clearance=LIFTOFF_CLEARANCE, **gas_constants(scenario))
+    return Plant(kind="coupled", names=tuple(b.name for b in bags), external=external,
+                 x_point=x_point, spans=tuple(b.span for b in bags),
+                 neutral_volume=neutral_volumes(external, capacity, plan.wet_weight, rho * g),
+                 strip_x=xs, strip_element=el, arrays=arrays, hull=hull, modes=modes, plan=plan,
+                 mass_line=mass_line, wet_weight=plan.wet_weight, hold_stern_bow=(stern, bow),
+                 gravity=g, seawater_density=rho, steel_density=rho_s)
+
+
+#: the whole structure is clear of the seabed once every strip is this high [m]
+LIFTOFF_CLEARANCE = 0.05
+
+
+def neutral_volumes(external: np.ndarray, capacity: np.ndarray, wet_weight: float,
+                    rho_g: float) -> np.ndarray:
+    """Gas volumes at the start (SPEC §5) [m^3]: the internal (closed) bags full, the external
+    bags sharing the rest of the wet weight W' [N] equally so the hull rests neutral."""
+    V = np.where(external, 0.0, capacity)
+    n_ext = int(external.sum())
+    if n_ext:
+        V = np.where(external, (wet_weight / rho_g - V.sum()) / n_ext, V)
+    return V
+
+
+def check_neutral(plant: Plant) -> None:
+    """InputError when the bags cannot hold the structure neutral at the start (SPEC §5):
+    the internal bags full and the external bags sharing the rest of W' must fit."""
+    V = plant.neutral_volume
+    ext = plant.external
+    to_t = plant.seawater_density / C.TONNE  # m^3 of displaced water -> tonnes of lift
+    cap = plant.arrays.capacity
+    if not ext.any() or np.any(V < -1e-9):
+        internal_t = float(cap[~ext].sum()) * to_t
+        raise InputError(
+            "lift", f"{internal_t:.0f} t of internal bags for "
+                    f"{plant.wet_weight / plant.gravity / C.TONNE:.0f} t wet weight",
+            "the internal bags alone must lift less than the wet weight and there must be an "
+            "external bag to control; change internal_bags or bag_lift_t")
+    over = V > cap * (1 + 1e-9)
+    if over.any():
+        k = int(np.flatnonzero(over)[0])
+        raise InputError(
+            f"lift.bags.{plant.names[k]}", f"{V[k] * to_t:.0f} t needed at the start",
+            f"each external bag must hold its share of the wet weight, but it lifts at most "
+            f"{cap[k] * to_t:.0f} t; raise bag_lift_t or add bags")

@@ -1,0 +1,88 @@
+"""Shear force and bending moment along the structure during the ascent (SPEC §3, §8).
+
+From the loop's strength snapshots (modal state and accelerations, holding forces, gas
+volumes, slings, current, noise), the loads on a fine grid along the hull come from the same
+laws the simulation integrates (:mod:`flexlift.physics`): submerged weight, inertia of the
+structural and added mass, hull drag, seabed contact, the released suction, the force noise,
+the internal bags' buoyancy over their spans; and point loads: the external bags' buoyancy
+with their drag, and the point masses with their inertia. Shear and moment follow by statics
+(:func:`flexlift.loads.shear_moment`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexlift.loads import shear_moment
+from flexlift.physics import gas, hydro, seabed
+
+#: most grid points along the structure (fine meshes are sampled more coarsely)
+MAX_POINTS = 4001
+
+
+def strength_grid(plant) -> tuple[np.ndarray, np.ndarray]:
+    """Grid x [m] along the structure (internal bags' span ends doubled: the jumps of their
+    loads) and the evaluation points just aft/forward of them [m]."""
+    hull = plant.hull
+    L = hull.length
+    n = min(8 * hull.n_elements, MAX_POINTS - 1)
+    base = np.linspace(0.0, L, n + 1)
+    ends = sorted({e for s in plant.spans if s is not None for e in s if 0 < e < L})
+    x = np.sort(np.concatenate([base, ends, ends]))
+    side = np.zeros_like(x)
+    for e in ends:
+        k = np.flatnonzero(np.isclose(x, e))
+        side[k[0]], side[k[-1]] = -1.0, 1.0
+    return x, np.clip(x + side * 1e-9 * L, 0.0, L)
+
+
+def line_loads(plant, xe: np.ndarray, snaps: dict) -> np.ndarray:
+    """Line loads [N/m] (nt, nx) at points ``xe`` [m] in every snapshot (up positive);
+    ``snaps`` holds the snapshot arrays stacked over time (see :func:`stack`)."""
+    a, hull = plant.arrays, plant.hull
+    psi = plant.modes.shape_at(xe)[:, : a.nr]
+    w, v, acc = snaps["q"] @ psi.T, snaps["v"] @ psi.T, snaps["a"] @ psi.T
+    m = hull.mass_per_length[hull.element_of(xe)]
+    rho, g = plant.seawater_density, plant.gravity
+    q = -hydro.submerged_weight(m, g, rho, plant.steel_density) - (m + plant.mass_line) * acc
+    xs = plant.strip_x
+    q += hydro.drag(v - snaps["current"][:, None], np.interp(xe, xs, a.strip_drag))
+    held = ~snaps["sep"][:, :1]  # (nt, 1): one holding group
+    k, c = np.interp(xe, xs, a.strip_k), np.interp(xe, xs, a.strip_c)
+    q += seabed.contact_load(w, v, k, c, held)
+    shape = seabed.holding_shape(xe, hull.length, *plant.hold_stern_bow)
+    q -= np.where(held, 0.0, snaps["H"][:, :1] * shape)
+    q += np.array([np.interp(xe, xs, row) for row in snaps["noise"]])
+    for i, span in enumerate(plant.spans):
+        if span is not None:
+            lift = gas.buoyancy(snaps["V"][:, i], a.rho_g) * snaps["attached"][:, i]
+            inside = (xe >= span[0]) & (xe <= span[1])
+            q += np.outer(lift / (span[1] - span[0]), inside)
+    return q
+
+
+def point_loads(plant, snaps: dict) -> list[tuple[float, np.ndarray]]:
+    """(x [m], force [N] per snapshot) of the external bags and the point masses."""
+    a, hull = plant.arrays, plant.hull
+    out = []
+    zd = snaps["v"] @ a.bag_shape.T  # (nt, nb) bag speeds
+    for i in np.flatnonzero(plant.external):
+        F = (gas.buoyancy(snaps["V"][:, i], a.rho_g)
+             + hydro.drag(zd[:, i] - snaps["current"], a.bag_drag[i])) * snaps["attached"][:, i]
+        out.append((float(plant.x_point[i]), F))
+    if np.any(hull.point_masses > 0):
+        acc = snaps["a"] @ plant.modes.displacement[:, : a.nr].T
+        for j, mp in enumerate(hull.point_masses):
+            if mp > 0:
+                wt = hydro.submerged_weight(mp, plant.gravity, plant.seawater_density,
+                                            plant.steel_density)
+                out.append((float(hull.x_nodes[j]), -wt - mp * acc[:, j]))
+    return out
+
+
+def strength(plant, snaps: dict):
+    """(x [m], V [N] (nt, nx), M [N m] (nt, nx)) along the structure at the snapshots
+    (``snaps``: the snapshot arrays stacked over time, names as in the loop's record)."""
+    x, xe = strength_grid(plant)
+    V, M = shear_moment(x, line_loads(plant, xe, snaps), point_loads(plant, snaps))
+    return x, V, M

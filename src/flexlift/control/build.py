@@ -1,0 +1,105 @@
+"""Controller constants from a scenario and a plant, and the fuzzy maps they use."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.control.controller import MODE_CODES, ControlArrays, ControlState, new_state
+from flexlift.errors import InputError
+from flexlift.lookup import Table2D
+
+#: grid of the supervisor's lookup table over [-1, 1]^2
+TABLE_GRID = 201
+
+
+def shaped_pull(total: float, x_bags, x_centroid: float) -> np.ndarray:
+    """Split a pull ``total`` [any unit] over bags at ``x_bags`` [m] so that its resultant acts
+    at ``x_centroid`` [m] (the suction's centroid), as close to equal shares as possible
+    (least-norm correction); equal shares for a single bag."""
+    x = np.asarray(x_bags, dtype=float)
+    n = x.size
+    equal = np.full(n, total / n)
+    if n < 2 or np.ptp(x) == 0:
+        return equal
+    A = np.vstack([np.ones(n), x])
+    rhs = np.array([0.0, total * x_centroid - equal @ x])
+    return equal + A.T @ np.linalg.solve(A @ A.T, rhs)
+
+
+def supervisor_fis_of(scenario):
+    """The scenario's supervisory fuzzy system (the built-in rule base, its operators)."""
+    from flexlift.rulebase import supervisor_fis_from
+
+    return supervisor_fis_from(scenario.control.supervisor)
+
+
+@functools.lru_cache(maxsize=16)
+def _supervisor_table(settings) -> Table2D:
+    """The supervisor of ``control.supervisor`` settings sampled into a lookup table (once
+    per settings: 40,401 exact evaluations take ~0.2 s)."""
+    from flexlift.rulebase import supervisor_fis_from
+
+    return Table2D.sample(supervisor_fis_from(settings), TABLE_GRID)
+
+
+@functools.lru_cache(maxsize=1)
+def _fill_map():
+    from flexlift.rulebase import fill_fis
+
+    return fill_fis()
+
+
+def fuzzy_maps(scenario, engine="table"):
+    """(supervisor table or None, external supervisor or None, fill map) for an ``engine``:
+    "table" (the supervisor sampled into a lookup table, default), "exact" (exact inference,
+    evaluated outside the compiled loop at every sample), a callable supervisor (points (n, 2)
+    -> u (n,)), or a pair (supervisor, fill) of callables."""
+    from flexlift.rulebase import FillMap
+
+    fill = _fill_map()
+    if isinstance(engine, str):
+        if engine not in ("table", "exact"):
+            raise InputError("engine", engine, "use 'table', 'exact', a callable or a pair")
+        if engine == "table":
+            return _supervisor_table(scenario.control.supervisor), None, fill
+        return None, supervisor_fis_of(scenario), fill
+    if callable(engine):
+        return None, engine, fill
+    supervisor, fill_fn = engine
+    return None, supervisor, FillMap(fill_fn)
+
+
+def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
+                   ) -> tuple[ControlArrays, ControlState]:
+    """Constants and memory of the controllers of ``plant``'s external bags in ``mode``."""
+    c = scenario.control
+    a = plant.arrays
+    bags = np.flatnonzero(plant.external)
+    x = plant.x_point[bags]
+    rho_g = a.rho_g
+    pull = c.breakout_pull_t * C.TONNE * plant.gravity / rho_g  # [m^3]
+    if mode == "coordinated" and c.coordination.shape_breakout_pull and plant.kind == "coupled":
+        xs = plant.strip_x
+        hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * xs))
+        V_pull = shaped_pull(pull, x, hold_centroid)
+    else:
+        V_pull = np.full(x.size, pull / max(x.size, 1))
+    half = 0.5 * np.ptp(x) if x.size > 1 else 1.0
+    s = c.supervisor
+    values = table.values if table is not None else np.zeros((2, 2))
+    arrays = ControlArrays(
+        mode=MODE_CODES[mode], bags=bags.astype(np.int64), period=1.0 / c.sample_rate_Hz,
+        target=c.target_height_m, speed=c.ascent_speed_m_s, accel=c.ascent_acceleration_m_s2,
+        lever=(x - x.mean()) / (half or 1.0), x=x, V_neutral=plant.neutral_volume[bags].copy(),
+        V_pull=V_pull, dV_max=s.volume_authority * a.capacity[bags],
+        e_scale=s.error_scale_m, r_scale=s.rate_scale_m_s, lam=c.fill.slope_1_s,
+        d_scale=c.fill.distance_scale_m3_s, kp=c.purge.kp_1_m3, ki=c.purge.ki_1_m3s,
+        kd=c.purge.kd_s_m3, fill_max=scenario.gas.fill_rate_max_m3_s,
+        deadband=c.volume_deadband_m3, k_pitch=c.coordination.pitch_gain_m3_rad,
+        k_pitch_rate=c.coordination.pitch_rate_gain_m3s_rad,
+        k_height=c.height_integral_gain_m2_s, filter_time=c.measurement_filter_s,
+        table=np.ascontiguousarray(values), fill_v=fill_map.v)
+    return arrays, new_state(bags.size)

@@ -1,0 +1,266 @@
+"""The ascent controllers (SPEC §7) of all controlled bags at once: one compiled controller.
+
+Each control sample (zero-order hold at ``control.sample_rate_Hz``) takes the measured height
+[m], vertical speed [m/s] and gas volume [m^3] of every controlled (external) bag and does,
+per bag:
+
+1. **Measurement filter**: first-order low-pass of height and speed (time constant
+   ``filter_time``), so the retained flexible modes are not chased.
+2. **Reference** z_ref(t), ż_ref(t): the trapezoid of :mod:`flexlift.control.reference` from
+   the height at separation (each bag's own in decentralized mode; the bags' mean in
+   coordinated mode) to the target.
+3. **Supervisor**: normalised error e = (z_ref - z) / e_scale and rate r = (ż_ref - ż) / r_scale,
+   saturated to [-1, 1], to u in [-1, 1] (the fuzzy map as a lookup table, or given from
+   outside); desired volume V_d = V_neutral + I + u ΔV_max. I, the adapted neutral volume,
+   integrates the height error (gain ``k_height``, at most ΔV_max either way) so that a bag
+   whose share of the lift differs from its neutral volume still arrives: no steady error on an
+   unbalanced hull. Before separation V_d holds the breakout pull.
+4. **Coordination** (coordinated mode): V_d -= (k_θ θ + k_θ' θ') ξ_i, θ the slope of the
+   least-squares line through the live bags' heights and ξ_i the bag's normalised lever.
+5. **Fill**, SIFSMC on ε = V_d - V: s = ε' + λ ε (ε' a filtered difference, time constant
+   :data:`DERIV_TAU`), d = s / sqrt(1 + λ^2) / d_scale -> the monotone fill map -> fill flow,
+   only beyond the deadband.
+6. **Purge**, PID on the excess V - V_d -> valve opening in [0, 1], from beyond the deadband and
+   while its integral is positive; anti-windup by conditional integration. Fill is blocked
+   while the valve is open.
+
+Modes: decentralized (each bag on its own measurements; the moment of separation is the one
+shared signal), coordinated, and open-loop (fill to the breakout volume, never purge). The
+paper's configuration is decentralized control on the paper's plant.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from flexlift._jit import jit
+from flexlift._struct import as_struct
+from flexlift.control.reference import trapezoid
+from flexlift.lookup import bilinear, linear
+
+#: time constant of the filter on the volume-deficit derivative of the SIFSMC [s]
+DERIV_TAU = 1.0
+#: control modes inside the compiled loop
+DECENTRALIZED, COORDINATED, OPEN_LOOP = 0, 1, 2
+MODE_CODES = {"decentralized": DECENTRALIZED, "coordinated": COORDINATED, "open-loop": OPEN_LOOP,
+              "paper": DECENTRALIZED}
+
+
+class ControlArrays(NamedTuple):
+    """Controller constants (read only), SI; arrays over the nc controlled bags."""
+
+    mode: int
+    bags: np.ndarray  # (nc,) index of each controlled bag among the plant's bags
+    period: float  # [s]
+    target: float  # [m]
+    speed: float  # [m/s]
+    accel: float  # [m/s^2]
+    lever: np.ndarray  # (nc,) normalised lever about the bags' centre [-]
+    x: np.ndarray  # (nc,) bag points [m]
+    V_neutral: np.ndarray  # (nc,) [m^3]
+    V_pull: np.ndarray  # (nc,) breakout pull as gas volume [m^3]
+    dV_max: np.ndarray  # (nc,) supervisor authority [m^3]
+    e_scale: float  # [m]
+    r_scale: float  # [m/s]
+    lam: float  # [1/s]
+    d_scale: float  # [m^3/s]
+    kp: float  # [1/m^3]
+    ki: float  # [1/(m^3 s)]
+    kd: float  # [s/m^3]
+    fill_max: float  # [m^3/s]
+    deadband: float  # [m^3]
+    k_pitch: float  # [m^3/rad]
+    k_pitch_rate: float  # [m^3 s/rad]
+    k_height: float  # adaptation of the neutral volume per metre of error [m^3/(m s)]
+    filter_time: float  # measurement low-pass time constant (0: none) [s]
+    table: np.ndarray  # (g, g) supervisor u on [-1, 1]^2
+    fill_v: np.ndarray  # (m,) fill map: fill fraction (non-decreasing) at normalised distances
+    #                     evenly over [0, 1] (0 below, 1 above)
+
+
+class ControlState(NamedTuple):
+    """The controllers' memory (mutable arrays over the nc controlled bags)."""
+
+    integ: np.ndarray  # purge PID integral [m^3 s]
+    prev_eps: np.ndarray  # last volume deficit [m^3]
+    eps_rate: np.ndarray  # filtered deficit rate [m^3/s]
+    prev_excess: np.ndarray  # last excess (PID derivative) [m^3]
+    adapt: np.ndarray  # adapted neutral volume I [m^3]
+    z_f: np.ndarray  # filtered height [m]
+    zd_f: np.ndarray  # filtered speed [m/s]
+    t_sep: np.ndarray  # separation time of each bag's hold (nan: not yet) [s]
+    z0: np.ndarray  # reference start height [m]
+    active: np.ndarray  # bool: False once a bag is lost
+    e_in: np.ndarray  # supervisor inputs of the last sample (normalised, saturated)
+    r_in: np.ndarray
+    u: np.ndarray  # supervisor output [-]
+    V_d: np.ndarray  # desired volume [m^3]
+    z_ref: np.ndarray  # reference height [m]
+    fill: np.ndarray  # fill flow command [m^3/s]
+    opening: np.ndarray  # purge valve opening [-]
+    flags: np.ndarray  # [0] first sample done, [1] some bag separated
+    in_z: np.ndarray  # scratch: this sample's measured heights, speeds, volumes, separations
+    in_zd: np.ndarray
+    in_V: np.ndarray
+    in_sep: np.ndarray
+
+
+def new_state(nc: int) -> ControlState:
+    """The controllers' memory before the first sample."""
+    z = np.zeros
+    return ControlState(z(nc), z(nc), z(nc), z(nc), z(nc), z(nc), z(nc), np.full(nc, np.nan),
+                        z(nc), np.ones(nc, dtype=np.bool_), z(nc), z(nc), z(nc), z(nc), z(nc),
+                        z(nc), z(nc), np.zeros(2, dtype=np.bool_), z(nc), z(nc), z(nc),
+                        np.zeros(nc, dtype=np.bool_))
+
+
+@jit
+def observe(t, z, zd, separated, C, S):
+    """Filter the measurements, note separations, form the reference and the supervisor's
+    inputs (into ``S.e_in``, ``S.r_in``, ``S.z_ref``). ``z``, ``zd`` (nc,) measured heights
+    [m] and speeds [m/s]; ``separated`` (nc,) bool, the hold of each bag has let go."""
+    nc = z.size
+    if not S.flags[0]:
+        S.z_f[:] = z
+        S.zd_f[:] = zd
+    elif C.filter_time > 0.0:
+        a = 1.0 - math.exp(-C.period / C.filter_time)
+        S.z_f[:] += a * (z - S.z_f)
+        S.zd_f[:] += a * (zd - S.zd_f)
+    else:
+        S.z_f[:] = z
+        S.zd_f[:] = zd
+    _note_separations(t, separated, C, S)
+    for i in range(nc):
+        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
+            S.z_ref[i], S.e_in[i], S.r_in[i] = 0.0, 0.0, 0.0
+            continue
+        pos, vel = trapezoid(t - S.t_sep[i], C.target - S.z0[i], C.speed, C.accel)
+        S.z_ref[i] = S.z0[i] + pos
+        S.e_in[i] = min(max((S.z_ref[i] - S.z_f[i]) / C.e_scale, -1.0), 1.0)
+        S.r_in[i] = min(max((vel - S.zd_f[i]) / C.r_scale, -1.0), 1.0)
+        if S.active[i] and C.k_height > 0.0:
+            lim = C.dV_max[i]
+            S.adapt[i] = min(max(S.adapt[i] + C.period * C.k_height * (S.z_ref[i] - S.z_f[i]),
+                                 -lim), lim)
+
+
+@jit
+def _note_separations(t, separated, C, S):
+    """Start the reference of every bag whose hold let go at this sample."""
+    new = False
+    for i in range(separated.size):
+        if separated[i] and math.isnan(S.t_sep[i]):
+            S.t_sep[i] = t
+            new = True
+    if not new:
+        return
+    S.flags[1] = True
+    if C.mode == COORDINATED:  # one heave reference from the live bags' mean height
+        total, count = 0.0, 0
+        for i in range(S.z_f.size):
+            if S.active[i]:
+                total += S.z_f[i]
+                count += 1
+        mean = total / count if count else 0.0
+        for i in range(S.z_f.size):
+            S.z0[i] = mean
+    else:
+        for i in range(S.z_f.size):
+            if S.t_sep[i] == t:
+                S.z0[i] = S.z_f[i]
+
+
+@jit
+def supervise(C, S):
+    """The supervisor's output from the lookup table, into ``S.u`` (0 before separation)."""
+    for i in range(S.u.size):
+        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
+            S.u[i] = 0.0
+        else:
+            S.u[i] = bilinear(C.table, -1.0, 1.0, -1.0, 1.0, S.e_in[i], S.r_in[i])
+
+
+@jit
+def act(V, C, S):
+    """Desired volumes, fill and purge commands from ``S.u`` and the measured volumes ``V``
+    (nc,) [m^3], into ``S.V_d``, ``S.fill`` [m^3/s] and ``S.opening`` [-]."""
+    nc = V.size
+    for i in range(nc):
+        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
+            S.V_d[i] = C.V_neutral[i] + C.V_pull[i]
+        else:
+            S.V_d[i] = C.V_neutral[i] + S.adapt[i] + S.u[i] * C.dV_max[i]
+    if C.mode == COORDINATED:
+        _level(C, S)
+    a = C.period / (DERIV_TAU + C.period)
+    gain = 1.0 / math.sqrt(1.0 + C.lam * C.lam) / C.d_scale
+    for i in range(nc):
+        eps = S.V_d[i] - V[i]
+        prev = S.prev_eps[i] if S.flags[0] else eps
+        S.eps_rate[i] += a * ((eps - prev) / C.period - S.eps_rate[i])
+        S.prev_eps[i] = eps
+        d = min(max((S.eps_rate[i] + C.lam * eps) * gain, -1.0), 1.0)
+        fill = linear(C.fill_v, 0.0, 1.0, d) * C.fill_max if eps > C.deadband else 0.0
+        opening = 0.0
+        if C.mode != OPEN_LOOP:
+            opening = _purge(i, -eps, C, S)
+            if opening > 0.0:
+                fill = 0.0
+        if not S.active[i]:
+            fill, opening = 0.0, 0.0
+        S.fill[i], S.opening[i] = fill, opening
+    S.flags[0] = True
+
+
+@jit
+def _purge(i, excess, C, S):
+    """PID valve opening [-] of bag ``i`` on the volume ``excess`` [m^3]; conditional
+    integration: the integral holds while the valve is saturated open or the PID is off."""
+    raw = C.kp * excess + C.ki * S.integ[i]
+    if C.kd != 0.0:
+        raw += C.kd * (excess - S.prev_excess[i]) / C.period
+        S.prev_excess[i] = excess
+    on = excess > C.deadband or S.integ[i] > 0.0
+    hold = (raw >= 1.0 and excess > 0.0) or not on
+    if not hold:
+        S.integ[i] = max(S.integ[i] + excess * C.period, 0.0)
+    return min(max(raw, 0.0), 1.0) if on else 0.0
+
+
+@jit
+def _level(C, S):
+    """Coordinated mode: the pitch-levelling correction of every desired volume."""
+    total, count = 0.0, 0
+    for i in range(S.z_f.size):
+        if S.active[i]:
+            total += C.x[i]
+            count += 1
+    if count < 2:
+        return
+    mean = total / count
+    xx, xz, xzd = 0.0, 0.0, 0.0
+    for i in range(S.z_f.size):
+        if S.active[i]:
+            d = C.x[i] - mean
+            xx += d * d
+            xz += d * S.z_f[i]
+            xzd += d * S.zd_f[i]
+    if xx <= 0.0:
+        return
+    corr = C.k_pitch * xz / xx + C.k_pitch_rate * xzd / xx
+    for i in range(S.z_f.size):
+        S.V_d[i] -= corr * C.lever[i]
+
+
+@jit
+def sample(t, z, zd, V, separated, C, S):
+    """One whole control sample (observe, supervise from the table, act) on the named tuples
+    ``C``, ``S``, as the compiled loop does it; for Python callers and tests."""
+    Cs, Ss = as_struct(C), as_struct(S)
+    observe(t, z, zd, separated, Cs, Ss)
+    supervise(Cs, Ss)
+    act(V, Cs, Ss)

@@ -1,0 +1,70 @@
+"""Results on disk: an ascent's dataset as netCDF and its time histories as CSV (SPEC §8).
+
+The dataset itself (variables, units, criteria, headline numbers) is built by
+:mod:`flexlift.ascent.result`; this module only writes and reads it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from flexlift.ascent.result import BAG_VARS, CRITERIA, HULL_VARS, Result
+
+__all__ = ["BAG_VARS", "CRITERIA", "HULL_VARS", "Result", "load_netcdf", "save_netcdf", "to_csv"]
+
+
+def save_netcdf(result: Result, path) -> Path:
+    """Write the dataset as netCDF 3 (scipy engine), atomically; returns the path."""
+    from flexlift.output.files import atomic_file
+
+    path = Path(path)
+    ds = result.dataset.copy()
+    ds["bag_kind"] = ds["bag_kind"].astype("S8")
+    with atomic_file(path, suffix=".nc") as tmp:
+        ds.to_netcdf(tmp, engine="scipy")
+    return path
+
+
+def load_netcdf(path) -> Result:
+    """Read a result written by :func:`save_netcdf`."""
+    with xr.open_dataset(path, engine="scipy") as ds:
+        ds = ds.load()
+    for name in ("bag", "bag_kind"):
+        if ds[name].dtype.kind == "S":
+            ds[name] = ds[name].astype(str)
+    return Result(ds)
+
+
+def to_csv(result: Result, folder, prefix: str = "simulate") -> list[Path]:
+    """Write the time histories (one column per variable and bag, units in the headers) and
+    the strength envelopes as CSV under ``folder``; returns the paths."""
+    from flexlift.output.files import write_text
+
+    ds = result.dataset
+    folder = Path(folder)
+    cols = ["time [s]"]
+    arrays = [ds.time.values]
+    for name in HULL_VARS:
+        cols.append(f"{name} [{ds[name].attrs['units']}]")
+        arrays.append(ds[name].values)
+    for name in BAG_VARS:
+        for k, b in enumerate(ds.bag.values):
+            cols.append(f"{name}_{b} [{ds[name].attrs['units']}]")
+            arrays.append(ds[name].values[:, k])
+    paths = [write_text(folder / f"{prefix}_time_histories.csv", _csv(cols, np.column_stack(arrays)))]
+    if "x" in ds.coords:
+        names = ["moment_max", "moment_min", "shear_max", "shear_min"]
+        cols = ["x [m]"] + [f"{n} [{ds[n].attrs['units']}]" for n in names]
+        arr = np.column_stack([ds.x.values] + [ds[n].values for n in names])
+        paths.append(write_text(folder / f"{prefix}_strength_envelope.csv", _csv(cols, arr)))
+    return paths
+
+
+def _csv(cols, arr) -> str:
+    lines = [",".join(cols)]
+    for row in arr:
+        lines.append(",".join("" if not np.isfinite(v) else f"{v:.6g}" for v in row))
+    return "\n".join(lines) + "\n"
