@@ -67,8 +67,10 @@ class _Flexibility:
         hull = beam.hull
         self.n = hull.n_elements
         self.s = dof_scale(hull)
-        s = sp.diags(self.s)
-        self.M = (s @ beam.M @ s).tocsr()  # scaled mass [kg]
+        M = beam.M.tocsr(copy=True)  # scaled mass S M S [kg], scaling the entries in place
+        M.data *= self.s[np.repeat(np.arange(M.shape[0]), np.diff(M.indptr))]
+        M.data *= self.s[M.indices]
+        self.M = M
         self.R = R / self.s[:, None]  # scaled rigid modes, still M-orthonormal
         self.MR = np.asarray(self.M @ self.R)
         c = hull.EI / hull.element_length**3  # [N/m]
