@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+import flexlift.modes_sparse as modes_sparse
 from flexlift.beam import assemble, deformation_matrix, dof_scale, element_deformation
 from flexlift.hull import Hull
 from flexlift.modes import analytic_free_free_hz, compute_modes, rigid_modes
@@ -47,6 +48,24 @@ def gram_errors(modes):
     return m_err, k_err
 
 
+@pytest.mark.parametrize(
+    "make", [lambda: uniform(300), lambda: uniform(400), lambda: rough(300, seed=300)],
+    ids=["300 uniform", "400 uniform", "300 non-uniform"],
+)
+def test_all_modes_are_orthonormal_and_diagonalise_K(make):
+    hull = make()
+    modes = compute_modes(hull)  # all 2 (N + 1) modes
+    assert modes.n_modes == modes.n_requested == 2 * hull.n_nodes
+    m_err, k_err = gram_errors(modes)
+    assert m_err < GRAM_TOL
+    assert k_err < GRAM_TOL
+    # rigid modes still exact, frequencies ascending
+    R = rigid_modes(assemble(hull))
+    np.testing.assert_array_equal(modes.omega[:2], 0.0)
+    np.testing.assert_array_equal(modes.phi[:, :2], R)
+    assert np.all(np.diff(modes.omega[2:]) >= 0)  # the top pair of a uniform beam: degenerate
+
+
 @pytest.mark.parametrize("n", [1000, 5000])
 def test_default_request_on_fine_meshes(n):
     hull = uniform(n)
@@ -67,11 +86,17 @@ def test_flexibility_form_alone_loses_the_highest_modes():
     lam, _, err = flexibility_flexible(beam, rigid_modes(beam), 600)
     assert err[19] < 1e-11  # the lowest twenty: fine
     assert err[-1] > 1e-7  # the highest: far off the SPEC's 1e-10
+    # the stiffness form that replaces them agrees with the dense peer up there
+    modes = compute_modes(hull)
+    dense = compute_modes(hull, solver="dense")
+    np.testing.assert_allclose(modes.omega[100:], dense.omega[100:], rtol=1e-10)
+    assert np.max(np.abs(np.sqrt(lam[98:]) / dense.omega[100:] - 1)) > 1e-7
 
 
-def test_unresolved_modes_are_dropped_and_reported(caplog):
-    # the flexibility form resolves only the lowest ~100 modes of 300 elements: the rest
-    # are not returned
+def test_unresolved_modes_are_dropped_and_reported(monkeypatch, caplog):
+    # without the dense stiffness completion (as above DENSE_MAX_DOF) the flexibility form
+    # resolves only the lowest ~100 modes of 300 elements: the rest are not returned
+    monkeypatch.setattr(modes_sparse, "DENSE_MAX_DOF", 0)
     hull = uniform(300)
     with caplog.at_level(logging.WARNING, logger="flexlift.modes"):
         modes = compute_modes(hull)

@@ -17,7 +17,7 @@ import scipy.linalg as sla
 from flexlift.beam import Beam, assemble, shape_functions
 from flexlift.errors import InputError, SimulationError
 from flexlift.hull import Hull
-from flexlift.modes_sparse import GRAM_TOL, sparse_flexible
+from flexlift.modes_sparse import DENSE_MAX_DOF, GRAM_TOL, sparse_flexible
 
 log = logging.getLogger(__name__)
 
@@ -139,8 +139,6 @@ def _dense_flexible(beam: Beam, R: np.ndarray, n_flex: int) -> tuple[np.ndarray,
 #: with ``n_modes=None``, models above this many elements get the lowest DEFAULT_LARGE_MODES
 LARGE_MODEL_ELEMENTS = 400
 DEFAULT_LARGE_MODES = 22
-#: largest model (DOFs) the dense solver accepts (~130 MB per dense matrix)
-DENSE_MAX_DOF = 4002
 
 
 def compute_modes(
@@ -152,14 +150,15 @@ def compute_modes(
     n_modes : total number of modes wanted, rigid included (default: all, 2 per node, up to
         400 elements; 22 = 2 rigid + 20 flexible above that) [-]
     solver : "sparse" (flexibility Lanczos of :mod:`flexlift.modes_sparse`: O(N) memory,
-        accurate to round-off at any mesh size for the low modes), "dense" (generalised
+        accurate to round-off at any mesh size for the low modes; the high modes of a model
+        up to DENSE_MAX_DOF = 4002 DOFs from a dense stiffness solve), "dense" (generalised
         ``eigh`` of K and M projected on the complement of the rigid modes: O(N^2) memory,
         O(N^3) time, loses digits as eps * (N / 4.73)^4 on fine meshes), or "auto" (sparse)
 
     The sparse solver checks SPEC section 2 on what it returns: Phi^T M Phi = I and
     Phi^T K Phi = diag(omega^2) to GRAM_TOL (1e-10, relative to the larger omega^2 of each
-    pair). When the highest requested modes miss it (many modes: the flexibility form
-    resolves mode k only to ~eps omega_k^2 / omega_1^2), only the modes
+    pair). When the highest requested modes miss it (many modes of a very fine mesh: the
+    flexibility form resolves mode k only to ~eps omega_k^2 / omega_1^2), only the modes
     below the first that misses are returned, with a logged warning; ``n_requested`` on the
     result keeps the number asked for.
     """
@@ -201,9 +200,11 @@ def compute_modes(
             log.warning(
                 "%d of the %d requested modes are resolved on %d elements (Phi^T M Phi = I "
                 "and Phi^T K Phi = diag(omega^2) to %g; mode %d is off by %.1e); returning "
-                "those. Ask for fewer modes.",
+                "those. Ask for fewer modes%s.",
                 resolved + 2, n_modes, beam.hull.n_elements, GRAM_TOL, resolved + 3,
                 err[resolved] if resolved < err.size else np.inf,
+                "" if n_dof <= DENSE_MAX_DOF
+                else f" or use at most {DENSE_MAX_DOF // 2 - 1} elements (solved densely)",
             )
             lam, V = lam[:resolved], V[:, :resolved]
     # a sign convention: the bow displacement of each mode is positive

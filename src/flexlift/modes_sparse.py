@@ -29,7 +29,13 @@ The highest modes: the eigenpairs of A are resolved to round-off of its largest 
 (mu_1 ~ 1), so mode k keeps M-orthogonality only to ~eps mu_1 / mu_k = eps lambda_k /
 lambda_1. For the lowest twenty modes that is 1e-12 to 4e-11 (the more, the finer the mesh),
 but all 600 modes of 300 elements reach lambda / lambda_1 ~ 6e10 and lose M-orthogonality to
-5e-6: such modes are not resolved.
+5e-6. The stiffness form (a dense ``eigh`` of K and M) is the mirror image: M-orthonormal to
+round-off and good to ~eps lambda_max / lambda_k, so accurate for the high modes and not for
+the low ones (the trap above). So when the requested modes reach above the geometric mean
+sqrt(lambda_1 lambda_max) on a model small enough for a dense solve (DENSE_MAX_DOF), those
+above it come from the stiffness form and those below from the flexibility form; both are
+good to ~eps sqrt(lambda_max / lambda_1) there (all 2,002 modes of 1,000 elements pass
+GRAM_TOL with 4e-11).
 
 Every solve ends in one check of the SPEC's contract (section 2): the block is
 M-orthonormalised by a Cholesky factor of its Gram matrix (lowest mode first, so that the
@@ -53,7 +59,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from flexlift.beam import Beam, assemble, dof_scale
+from flexlift.beam import Beam, assemble, dof_scale, element_mass, element_stiffness
 from flexlift.errors import SimulationError
 
 log = logging.getLogger(__name__)
@@ -66,6 +72,8 @@ _FEW_COLUMNS = 64
 #: SPEC section 2: Phi^T M Phi = I and Phi^T K Phi = diag(omega^2) to this (each entry of the
 #: latter relative to the larger omega^2 of its pair); modes that miss it are not resolved [-]
 GRAM_TOL = 1e-10
+#: largest model (DOFs) solved densely (~130 MB per dense matrix)
+DENSE_MAX_DOF = 4002
 
 
 def _inner(A, B):
@@ -144,6 +152,17 @@ class _Flexibility:
         """Mode shapes in the scaled DOFs (M-orthogonal to the rigid modes) of vectors z."""
         return self.project(self.integrate(*self._LinvT(z)))
 
+    def stiffness_coordinates(self, y):
+        """z = L^T D y of scaled DOFs y, so that y^T K_s y = z^T z (inverse of :meth:`modes`
+        on the complement of the rigid modes)."""
+        w, t = y[0::2], y[1::2]
+        d1 = w[:-1] + t[:-1] - w[1:]
+        d2 = w[:-1] - w[1:] + t[1:]
+        z = np.empty((2 * self.n, y.shape[1]))
+        z[0::2] = self.rc * (2.0 * d1 + d2)
+        z[1::2] = _SQRT3 * self.rc * d2
+        return z
+
     def matmat(self, z):
         z = np.asarray(z, dtype=float)
         if z.ndim == 1:
@@ -178,6 +197,37 @@ def _flexibility_solve(op: _Flexibility, n_flex: int, tol: float = 0.0):
     order = np.argsort(mu)[::-1]
     mu, Z = mu[order], Z[:, order]
     return op.lam_ref / mu, op.modes(Z), Z
+
+
+def _stiffness_solve(beam: Beam, op: _Flexibility, lo: int, hi: int):
+    """Flexible modes lo..hi-1 (0-based) of the stiffness form K_s y = lambda M_s y by a dense
+    generalised ``eigh`` (indices 0 and 1 are the rigid modes, polluted and skipped): lambda
+    [rad^2/s^2], scaled shapes y and their stiffness coordinates z."""
+    Ks = beam.K.toarray()
+    Ks *= op.s[:, None]
+    Ks *= op.s[None, :]
+    Ms = op.M.toarray()
+    if 4 * (hi - lo) > Ks.shape[0]:  # many vectors: divide and conquer on all is faster
+        lam, Y = sla.eigh(Ks, Ms, driver="gvd")
+        lam, Y = lam[lo + 2:hi + 2], Y[:, lo + 2:hi + 2]
+    else:
+        lam, Y = sla.eigh(Ks, Ms, subset_by_index=[lo + 2, hi + 1])
+    Y = op.project(Y)
+    return lam, Y, op.stiffness_coordinates(Y)
+
+
+#: largest eigenvalue of the Hermite element of unit length, stiffness and mass per length
+_UNIT_ELEMENT_LAM_MAX = float(
+    sla.eigh(element_stiffness(1.0, 1.0), element_mass(1.0, 1.0), eigvals_only=True)[-1]
+)
+
+
+def _lam_max_bound(beam: Beam) -> float:
+    """Upper bound of the largest eigenvalue: the largest of the elements' own [rad^2/s^2]
+    (extra and point masses only lower it)."""
+    hull = beam.hull
+    ratio = float(np.max(hull.EI / hull.mass_per_length))
+    return _UNIT_ELEMENT_LAM_MAX * ratio / hull.element_length**4
 
 
 def _gram(A, B=None):
@@ -241,6 +291,40 @@ def flexibility_flexible(
     return lam, op.s[:, None] * Y, err
 
 
+def _split(beam: Beam, lam: np.ndarray) -> int:
+    """Number of the modes lam (ascending) below sqrt(lambda_1 lambda_max), at least 1."""
+    return max(1, int(np.searchsorted(lam, np.sqrt(lam[0] * _lam_max_bound(beam)))))
+
+
+def flexibility_and_stiffness(
+    beam: Beam, R: np.ndarray, n_flex: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`flexibility_flexible`, except that on a model of at most DENSE_MAX_DOF the
+    requested modes above sqrt(lambda_1 lambda_max) come from a dense solve of the stiffness
+    form, which resolves them where the flexibility form cannot (module docstring)."""
+    op = _Flexibility(beam, R)
+    small = beam.n_dof <= DENSE_MAX_DOF
+    if small and _DENSE_BELOW < op.size <= 2 * n_flex + 2:
+        # nearly all modes: the stiffness form first (it places the split), then the
+        # flexibility form for the few below the split
+        lam_s, Y_s, Z_s = _stiffness_solve(beam, op, 0, n_flex)
+        k = min(_split(beam, lam_s), n_flex)
+        lam, Y, Z = _flexibility_solve(op, k)
+        lam_s, Y_s, Z_s = lam_s[k:], Y_s[:, k:], Z_s[:, k:]
+    else:
+        lam, Y, Z = _flexibility_solve(op, n_flex)
+        k = _split(beam, lam)
+        lam_s = None
+        if small and k < n_flex:
+            lam_s, Y_s, Z_s = _stiffness_solve(beam, op, k, n_flex)
+            lam, Y, Z = lam[:k], Y[:, :k], Z[:, :k]
+    if lam_s is not None:
+        log.debug("modes %d..%d of %d from the stiffness form", k + 1, n_flex, n_flex)
+        lam, Y, Z = np.r_[lam, lam_s], np.hstack([Y, Y_s]), np.hstack([Z, Z_s])
+    lam, Y, err = orthonormalised(op.M, lam, Y, Z)
+    return lam, op.s[:, None] * Y, err
+
+
 def shift_invert_flexible(
     beam: Beam, R: np.ndarray, n_flex: int, tol: float = 0.0, sigma: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -300,15 +384,16 @@ def sparse_flexible(
     (:func:`orthonormalised`): the modes with err <= GRAM_TOL meet SPEC section 2. Fewer
     columns come back if the solver's vectors were linearly dependent.
 
-    method : "flexibility" (default when K is the hull's own stiffness), "shift-invert"
-        (any K with null space R), or "auto".
+    method : "flexibility" (default when K is the hull's own stiffness: the flexibility form,
+        completed by the stiffness form for high modes it cannot resolve, see
+        :func:`flexibility_and_stiffness`), "shift-invert" (any K with null space R), or "auto".
     """
     if method == "auto":
         method = "flexibility" if _k_matches_hull(beam) else "shift-invert"
     log.debug("sparse modal solve: %s, %d elements, %d flexible modes", method,
               beam.hull.n_elements, n_flex)
     if method == "flexibility":
-        return flexibility_flexible(beam, R, n_flex)
+        return flexibility_and_stiffness(beam, R, n_flex)
     if method == "shift-invert":
         return shift_invert_flexible(beam, R, n_flex)
     raise ValueError(f"method {method!r}: use 'flexibility', 'shift-invert' or 'auto'")
