@@ -5,6 +5,7 @@ the ~EI/l^3 entries of an assembled K), each entry relative to the larger omega^
 the error that an M-orthonormality error of the same size implies for exact eigenvectors.
 """
 
+import json
 import logging
 
 import numpy as np
@@ -13,6 +14,7 @@ import scipy.sparse as sp
 
 import flexlift.modes_sparse as modes_sparse
 from flexlift.beam import assemble, deformation_matrix, dof_scale, element_deformation
+from flexlift.cli import main
 from flexlift.hull import Hull
 from flexlift.modes import analytic_free_free_hz, compute_modes, rigid_modes
 from flexlift.modes_sparse import GRAM_TOL, flexibility_flexible, orthonormalised
@@ -105,6 +107,19 @@ def test_unresolved_modes_are_dropped_and_reported(monkeypatch, caplog):
     assert f"{modes.n_modes} of the 602 requested modes are resolved" in caplog.text
     m_err, k_err = gram_errors(modes)
     assert m_err < GRAM_TOL and k_err < GRAM_TOL
+
+
+def test_json_reports_requested_and_resolved_modes(capsys, monkeypatch):
+    assert main(["modes", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["modes_requested"] == s["modes_resolved"] == 24
+    monkeypatch.setattr(modes_sparse, "DENSE_MAX_DOF", 0)
+    assert main(["modes", "--elements", "300", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["modes_requested"] == 602
+    assert s["modes_resolved"] == len(s["frequencies_hz"]) < 602
+    assert main(["modes", "--elements", "300"]) == 0
+    assert f"only {s['modes_resolved']} of the 602 requested modes" in capsys.readouterr().out
 
 
 def test_orthonormalised_checks_and_drops_dependent_columns():
