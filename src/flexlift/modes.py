@@ -15,8 +15,9 @@ import numpy as np
 import scipy.linalg as sla
 
 from flexlift.beam import Beam, assemble, shape_functions
-from flexlift.errors import InputError
+from flexlift.errors import InputError, SimulationError
 from flexlift.hull import Hull
+from flexlift.modes_sparse import DENSE_MAX_DOF, GRAM_TOL, sparse_flexible
 
 log = logging.getLogger(__name__)
 
@@ -38,12 +39,15 @@ class Modes:
         [w_0, theta_0, w_1, ...] [m/sqrt(kg) and rad/sqrt(kg)]
     hull : Hull — the structure
     n_rigid : int — number of rigid modes (2 for a free-free beam)
+    n_requested : int — modes asked for, rigid included; ``n_modes`` (those returned) is
+        smaller when the solver could not resolve the highest ones to SPEC section 2 [-]
     """
 
     omega: np.ndarray
     phi: np.ndarray
     hull: Hull
     n_rigid: int = 2
+    n_requested: int | None = None
 
     @property
     def n_modes(self) -> int:
@@ -135,8 +139,6 @@ def _dense_flexible(beam: Beam, R: np.ndarray, n_flex: int) -> tuple[np.ndarray,
 #: with ``n_modes=None``, models above this many elements get the lowest DEFAULT_LARGE_MODES
 LARGE_MODEL_ELEMENTS = 400
 DEFAULT_LARGE_MODES = 22
-#: largest model (DOFs) the dense solver accepts (~130 MB per dense matrix)
-DENSE_MAX_DOF = 4002
 
 
 def compute_modes(
@@ -148,9 +150,17 @@ def compute_modes(
     n_modes : total number of modes wanted, rigid included (default: all, 2 per node, up to
         400 elements; 22 = 2 rigid + 20 flexible above that) [-]
     solver : "sparse" (flexibility Lanczos of :mod:`flexlift.modes_sparse`: O(N) memory,
-        accurate to round-off at any mesh size), "dense" (generalised ``eigh`` of K and M
-        projected on the complement of the rigid modes: O(N^2) memory, O(N^3) time, loses
-        digits as eps * (N / 4.73)^4 on fine meshes), or "auto" (sparse)
+        accurate to round-off at any mesh size for the low modes; the high modes of a model
+        up to DENSE_MAX_DOF = 4002 DOFs from a dense stiffness solve), "dense" (generalised
+        ``eigh`` of K and M projected on the complement of the rigid modes: O(N^2) memory,
+        O(N^3) time, loses digits as eps * (N / 4.73)^4 on fine meshes), or "auto" (sparse)
+
+    The sparse solver checks SPEC section 2 on what it returns: Phi^T M Phi = I and
+    Phi^T K Phi = diag(omega^2) to GRAM_TOL (1e-10, relative to the larger omega^2 of each
+    pair). When the highest requested modes miss it (many modes of a very fine mesh: the
+    flexibility form resolves mode k only to ~eps omega_k^2 / omega_1^2), only the modes
+    below the first that misses are returned, with a logged warning; ``n_requested`` on the
+    result keeps the number asked for.
     """
     beam = hull if isinstance(hull, Beam) else assemble(hull)
     n_dof = beam.n_dof
@@ -174,19 +184,36 @@ def compute_modes(
     n_flex = n_modes - 2
     if solver == "dense":
         lam, V = _dense_flexible(beam, R, n_flex)
+        # mass-normalise (eigh already does; repeat against round-off of the projection)
+        V = V / np.sqrt(np.einsum("ij,ij->j", V, np.asarray(beam.M @ V)))
     else:
-        from flexlift.modes_sparse import sparse_flexible
-
-        lam, V = sparse_flexible(beam, R, n_flex)
-    # mass-normalise (eigh already does; repeat against round-off of the projection)
-    norms = np.sqrt(np.einsum("ij,ij->j", V, np.asarray(beam.M @ V)))
-    V = V / norms
+        lam, V, err = sparse_flexible(beam, R, n_flex)
+        resolved = int(np.sum(err <= GRAM_TOL))  # err is non-decreasing
+        if resolved == 0:
+            raise SimulationError(
+                f"no flexible mode of this {beam.hull.n_elements}-element model meets "
+                f"Phi^T K Phi = diag(omega^2) to {GRAM_TOL:g}"
+                + (f" (the first is off by {err[0]:.1e})" if err.size else "")
+                + "; use a coarser mesh or solver='dense'"
+            )
+        if resolved < n_flex:
+            log.warning(
+                "%d of the %d requested modes are resolved on %d elements (Phi^T M Phi = I "
+                "and Phi^T K Phi = diag(omega^2) to %g; mode %d is off by %.1e); returning "
+                "those. Ask for fewer modes%s.",
+                resolved + 2, n_modes, beam.hull.n_elements, GRAM_TOL, resolved + 3,
+                err[resolved] if resolved < err.size else np.inf,
+                "" if n_dof <= DENSE_MAX_DOF
+                else f" or use at most {DENSE_MAX_DOF // 2 - 1} elements (solved densely)",
+            )
+            lam, V = lam[:resolved], V[:, :resolved]
     # a sign convention: the bow displacement of each mode is positive
     sign = np.sign(V[-2])
     sign[sign == 0] = 1.0
     V = V * sign
     omega = np.concatenate([[0.0, 0.0], np.sqrt(np.clip(lam, 0.0, None))])
-    return Modes(omega=omega, phi=np.column_stack([R, V]), hull=beam.hull, n_rigid=2)
+    return Modes(omega=omega, phi=np.column_stack([R, V]), hull=beam.hull, n_rigid=2,
+                 n_requested=n_modes)
 
 
 def zero_crossings(modes: Modes, column: int, samples_per_element: int | None = None) -> np.ndarray:

@@ -88,6 +88,9 @@ def summary_of(scenario, modes: Modes, conv: Convergence | None, solver: str) ->
         "solver": "sparse" if solver == "auto" else solver,
         "frequencies_hz": [float(f) for f in modes.frequencies_hz],
         "rigid_modes": modes.n_rigid,
+        # the solver returns only the modes it resolves to SPEC section 2 (flexlift.modes)
+        "modes_requested": modes.n_requested or modes.n_modes,
+        "modes_resolved": modes.n_modes,
         "mode_nodes": _nodes_of(modes),
         "analytic_hz": (
             [float(f) for f in analytic_free_free_hz(hull, min(5, n_flex))]
@@ -216,6 +219,9 @@ def _main(args) -> int:
     f = s["frequencies_hz"]
     w(f"{scenario.name}: {s['elements']} elements, {len(f)} modes "
       f"({s['rigid_modes']} rigid, exact)\n")
+    if s["modes_resolved"] < s["modes_requested"]:
+        w(f"  only {s['modes_resolved']} of the {s['modes_requested']} requested modes are "
+          "resolved to Phi^T M Phi = I, Phi^T K Phi = diag(omega^2); ask for fewer\n")
     fa = s["analytic_hz"] or []
     for i in range(s["rigid_modes"], min(len(f), s["rigid_modes"] + 10)):
         j = i - s["rigid_modes"]
