@@ -324,7 +324,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
         if sw.separated:
             # mechanics: exact for the linear part (modes, damping, active contact springs),
             # second order in the rest (ETD2); holding force: exact exponential release
-            H_old = x[-1]
+            H_old, t_old = x[-1], t  # the holding force at the start of its release in this step
             b = aux.Qext
             if aux.w_min < LIFTOFF_CLEARANCE:
                 # on or near the seabed: contact springs engage and release inside the step;
@@ -367,6 +367,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
                 sw.separated = True
                 rec.event(t + th * dt, "separation", None, f"uplift {aux.uplift / (C.TONNE * g):.0f} t")
                 x[-1] = H_s
+                H_old, t_old = H_s, t + th * dt  # separated inside the step: release from here
                 if rest > 0.0:
                     dx_s, aux_s = dynamics(t + dt, x, u, params)
                     x[:] = _substeps(x, t + dt - rest, rest, CONTACT_SUBSTEPS, dx_s, aux_s, None, u,
@@ -385,7 +386,7 @@ def _run(scenario, P, mode, T_end, engine, progress) -> Result:
         if leaking:
             x[nsl] = np.maximum(x[nsl], 0.0)
         if sw.separated and x[-1] < 1e-3 * H0 and not rec.has("breakout"):
-            t_b = t + tau * math.log(H_old / (1e-3 * H0)) if H_old > 1e-3 * H0 else t
+            t_b = t_old + tau * math.log(H_old / (1e-3 * H0)) if H_old > 1e-3 * H0 else t_old
             rec.event(t_b, "breakout", None, "holding force below 0.1 % of H0")
         if k % report_every == 0:
             if progress is not None:
