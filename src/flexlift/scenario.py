@@ -16,7 +16,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Literal
 
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -27,7 +26,9 @@ from pydantic import (
 )
 
 from flexlift import constants as C
-from flexlift.errors import InputError
+from flexlift.errors import InputError, brief, clean
+from flexlift.scenario_errors import first_error, format_error
+from flexlift.scenario_file import decode, dump_yaml, load_yaml, read_bytes
 
 Pos = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
@@ -375,7 +376,7 @@ class Scenario(_Section):
     # ------------------------------------------------------------------ conveniences
     def to_yaml(self) -> str:
         """The scenario with every default filled in, as YAML (repeatable input)."""
-        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+        return dump_yaml(self.model_dump(mode="json"))
 
     def checksum(self) -> str:
         """SHA-256 of the canonical YAML: two runs with the same checksum had the same input."""
@@ -387,8 +388,11 @@ class Scenario(_Section):
         for key, value in dotted.items():
             node = data
             *path, last = key.split(".")
-            for p in path:
-                node = node[p]
+            for i, p in enumerate(path):
+                node = node.setdefault(p, {})  # an unknown section is reported by the schema
+                if not isinstance(node, dict):
+                    raise InputError(key, brief(value), f"{'.'.join(path[: i + 1])} is a value, "
+                                     "not a section with keys")
             node[last] = value
         return parse_scenario(data, source=f"{self.name} (modified)")
 
@@ -400,59 +404,43 @@ def builtin_names() -> list[str]:
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
 
 
-def _format_error(err: dict, source: str) -> str:
-    loc = ".".join(str(p) for p in err["loc"] if not str(p).startswith("function-"))
-    if err["type"] == "extra_forbidden":
-        # name the valid keys of the section that holds the unknown one
-        model: type[BaseModel] = Scenario
-        for part in err["loc"][:-1]:
-            field = model.model_fields.get(str(part)) if isinstance(part, str) else None
-            ann = getattr(field, "annotation", None) if field else None
-            model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else model
-        valid = ", ".join(model.model_fields)
-        return f"{source}: unknown key '{loc}'; valid keys here are: {valid}"
-    msg = err["msg"].removeprefix("Value error, ")
-    value = err.get("input")
-    if isinstance(value, dict):  # a check across a whole section: its message names the fields
-        return f"{source}: {loc + ': ' if loc else ''}{msg}"
-    return f"{source}: {loc or 'scenario'} = {value!r}: {msg}"
-
-
 def parse_scenario(data, source: str = "scenario") -> Scenario:
     """Validate a mapping as a :class:`Scenario`; raise :class:`InputError` with one line."""
-    if data is None:
-        data = {}
+    source = clean(str(source), 120)
     if not isinstance(data, dict):
-        raise InputError(source, type(data).__name__, "a scenario file must hold a YAML mapping")
+        raise InputError(source, brief(data, 40) if data is None else type(data).__name__,
+                         "a scenario must be a mapping of keys (name: ..., hull: ..., ...)")
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors()[0]
-        raise InputError.from_line(_format_error(first, source)) from None
+        err = first_error(exc.errors(include_url=False), Scenario)
+        raise InputError.from_line(format_error(err, source, Scenario)) from None
+
+
+#: what an empty file gets told
+EMPTY = ("the file is empty (or only comments); an empty scenario is not read as the tanker: "
+         "write `name: tanker` to start from the tanker's defaults")
 
 
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
-    """Load a built-in scenario by name (default ``tanker``) or a YAML file by path."""
+    """Load a built-in scenario by name (default ``tanker``) or a YAML file by path.
+
+    The file is read defensively (:mod:`flexlift.scenario_file`): a regular UTF-8 file of at
+    most 1 MB, one YAML document, no duplicate keys, bounded nesting and aliases; an empty
+    file is an error, not the tanker."""
     if name_or_path is None:
         name_or_path = "tanker"
-    text: str
-    source = str(name_or_path)
+    source = clean(str(name_or_path), 120)
     path = Path(name_or_path)
     if isinstance(name_or_path, str) and name_or_path in builtin_names() and not path.exists():
         text = (resources.files("flexlift") / "scenarios" / f"{name_or_path}.yaml").read_text()
     else:
-        if not path.is_file():
-            raise InputError(
-                "scenario",
-                source,
-                f"no such file; give a YAML path or a built-in name ({', '.join(builtin_names())})",
-            )
-        text = path.read_text(encoding="utf-8")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or "not valid YAML"
-        raise InputError.from_line(f"{source}: malformed YAML{where}: {problem}") from None
+        data = read_bytes(path, source, ", ".join(builtin_names()))
+        text = decode(data, source)
+    data = load_yaml(text, source)
+    if data is None:
+        raise InputError.from_line(f"{source}: {EMPTY}")
+    if not isinstance(data, dict):
+        raise InputError(source, type(data).__name__, "a scenario file must hold a YAML mapping "
+                         "of keys (name: ..., hull: ..., ...)")
     return parse_scenario(data, source=source)
