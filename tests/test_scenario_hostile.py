@@ -3,15 +3,20 @@ or a hang (issue 10). Most cases here were a traceback, a hang or a silent accep
 the others guard what must keep working (a symlink to a file, a UTF-8 byte-order mark, YAML
 merge keys, names such as ``.hidden``)."""
 
+import math
 import os
 import sys
 import time
+import typing
 
+import annotated_types as at
+import numpy as np
 import pytest
+from pydantic import BaseModel
 
 from flexlift.cli import main
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario, parse_scenario
+from flexlift.scenario import Scenario, load_scenario, parse_scenario
 
 #: the documented limits of a scenario file (README, Scenario format)
 MAX_BYTES = 1_000_000
@@ -313,3 +318,283 @@ def test_text_that_reads_as_a_number_is_quoted_in_the_yaml(tmp_path, tanker):
     assert load_scenario(p) == s  # unquoted, 1e5 reads back as a number: no valid name
     # and the tanker's YAML (and so its checksum) is what PyYAML wrote before
     assert tanker.to_yaml() == yaml.safe_dump(tanker.model_dump(mode="json"), sort_keys=False)
+
+
+# --------------------------------------------------------------------------- numbers
+def _leaves(model: type[BaseModel], prefix=""):
+    for name, field in model.model_fields.items():
+        ann = field.annotation
+        if isinstance(ann, type) and issubclass(ann, BaseModel):
+            yield from _leaves(ann, f"{prefix}{name}.")
+        else:
+            yield f"{prefix}{name}", field
+
+
+def _constraints(obj):
+    """Every annotated_types constraint in a field or annotation, however nested."""
+    out = []
+    if isinstance(obj, at.BaseMetadata):
+        out.append(obj)
+    for m in getattr(obj, "metadata", None) or ():
+        out += _constraints(m)
+    for m in getattr(obj, "__metadata__", ()):
+        out += _constraints(m)
+    for a in typing.get_args(getattr(obj, "annotation", obj)):
+        out += _constraints(a)
+    return out
+
+
+def _is_numeric(field) -> bool:
+    def numeric(t):
+        return t in (int, float) or any(numeric(a) for a in typing.get_args(t))
+
+    return numeric(field.annotation)
+
+
+def _nest(key: str, value) -> dict:
+    data: dict = {}
+    node = data
+    *path, last = key.split(".")
+    for p in path:
+        node = node.setdefault(p, {})
+    node[last] = value
+    return data
+
+
+#: a valid item of each list of sections, to place one bad number in
+_ITEMS = {
+    "hull.point_masses": [{"node": 1, "mass_t": 1.0}],
+    "lift.bags": [{"name": "b", "kind": "external", "node": 2},
+                  {"name": "b", "kind": "external", "x_m": 1.0},
+                  {"name": "b", "kind": "internal", "span_m": [1.0, 2.0]}],
+    "faults": [{"kind": m.model_fields["kind"].annotation.__args__[0], "bag": "b", "time_s": 1.0}
+               for m in typing.get_args(typing.get_args(Scenario.model_fields["faults"].annotation)[0])
+               [0].__args__],
+}
+
+
+def _slots():
+    """{label: (field, place)} for every number of the schema: ``place(v)`` is a scenario
+    mapping with ``v`` in that number's place and everything else valid."""
+    out = {}
+    for key, field in _leaves(Scenario):
+        if key in _ITEMS:
+            for item in _ITEMS[key]:
+                model = Scenario
+                for part in key.split("."):
+                    model = model.model_fields[part].annotation
+                    while not (isinstance(model, type) and issubclass(model, BaseModel)):
+                        args = [a for a in typing.get_args(model)
+                                if isinstance(a, type) and issubclass(a, BaseModel)
+                                and (a.model_fields.get("kind") is None or item.get("kind")
+                                     in typing.get_args(a.model_fields["kind"].annotation))]
+                        model = args[0] if args else typing.get_args(model)[0]
+                for name, f in model.model_fields.items():
+                    if not _is_numeric(f) or (name in ("x_m", "node", "span_m") and name not in item):
+                        continue
+                    label = f"{key}[0].{name}"
+                    if "tuple" in str(f.annotation):
+                        out[label + "[0]"] = (f, lambda v, k=key, i=item, n=name: _nest(
+                            k, [{**i, n: [v, 2.0]}]))
+                    else:
+                        out[label] = (f, lambda v, k=key, i=item, n=name: _nest(k, [{**i, n: v}]))
+        elif "tuple" in str(field.annotation):
+            out[key + "[0]"] = (field, lambda v, k=key: _nest(k, [v, 113.0]))
+        elif _is_numeric(field):
+            out[key] = (field, lambda v, k=key: _nest(k, v))
+    return out
+
+
+SLOTS = _slots()
+REAL = [k for k, (f, _) in SLOTS.items() if "float" in str(f.annotation)]
+
+
+def test_the_key_walk_sees_every_number():
+    assert len(SLOTS) >= 80, sorted(SLOTS)
+    for k in ("hull.elements", "disturbance.seed", "hull.ballast_tank_frames[0]",
+              "hull.point_masses[0].mass_t", "lift.bags[0].span_m[0]", "faults[0].leak_time_s",
+              "faults[0].rate_m_s", "control.supervisor.resolution"):
+        assert k in SLOTS, k
+    assert "hull.bending_stiffness_Nm2" in REAL and "hull.elements" not in REAL
+    assert "lift.bags[0].kind" not in SLOTS and "name" not in SLOTS
+
+
+@pytest.mark.parametrize("label", sorted(SLOTS))
+def test_every_number_is_bounded_below_and_above(label):
+    kinds = {type(c) for c in _constraints(SLOTS[label][0])}
+    assert kinds & {at.Ge, at.Gt} and kinds & {at.Le, at.Lt}, f"{label} has no range: {kinds}"
+
+
+@pytest.mark.parametrize("label", sorted(REAL))
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_nan_and_infinity_are_refused_in_every_real_number(label, value):
+    _refused(SLOTS[label][1](value), f"{label} = {value}: Input should be a finite number")
+
+
+@pytest.mark.parametrize("label", sorted(SLOTS))
+@pytest.mark.parametrize("value, needle", [(True, "not true/false"), (False, "not true/false"),
+                                           ("12", "not text"), ("1e3", "not text")])
+def test_booleans_and_text_are_not_numbers(label, value, needle):
+    _refused(SLOTS[label][1](value), f"{label} = {value!r}: a number is needed here, {needle}")
+
+
+def test_nan_in_yaml_current_was_accepted(tmp_path, capsys):
+    p = _write(tmp_path, "disturbance:\n  current_m_s: .nan\n")  # passed, then exit 1 in numerics
+    _refused(p, "disturbance.current_m_s = nan: Input should be a finite number")
+    _cli_one_line(capsys, ["simulate", str(p), "--duration", "20", "--json"], "current_m_s")
+
+
+def test_infinite_breakout_factor_was_an_overflow(tmp_path, capsys):
+    p = _write(tmp_path, "lift:\n  breakout_factor: .inf\n")
+    _cli_one_line(capsys, ["loads", str(p), "--json"], "lift.breakout_factor = inf")
+
+
+def test_integers_are_real_numbers_and_whole_reals_are_integers():
+    s = parse_scenario({"hull": {"length_m": 78, "elements": 12.0, "bending_stiffness_Nm2": [3e12] * 12}})
+    assert s.hull.length_m == 78.0 and isinstance(s.hull.length_m, float) and s.hull.elements == 12
+    _refused({"hull": {"elements": 11.5}}, "hull.elements = 11.5", "fractional part")
+
+
+def test_other_strict_types():
+    _refused({"control": {"coordination": {"shape_breakout_pull": "yes"}}}, "shape_breakout_pull")
+    _refused({"control": {"coordination": {"shape_breakout_pull": 1}}}, "shape_breakout_pull")
+    _refused({"description": 2024}, "description = 2024")
+    _refused({"name": b"bytes"}, "name = b'bytes'")
+
+
+@pytest.mark.parametrize(
+    "data, needles",
+    [
+        ({"hull": {"elements": 1_000_000_000}}, ["hull.elements = 1000000000", "less than or equal to 20000"]),
+        ({"hull": {"elements": 10**29 + 7}}, ["hull.elements", "20000"]),
+        ({"hull": {"elements": 10**5000}}, ["an integer of about 5001 digits"]),
+        ({"hull": {"bending_stiffness_Nm2": 1e-300}}, ["bending_stiffness_Nm2 = 1e-300", "1000"]),
+        ({"hull": {"bending_stiffness_Nm2": [1e12] * 10 + [1e17]}}, ["bending_stiffness_Nm2[10] = 1e+17"]),
+        ({"disturbance": {"seed": -1}}, ["disturbance.seed = -1", "greater than or equal to 0"]),
+        ({"control": {"supervisor": {"resolution": 10**9}}}, ["resolution", "10001"]),
+        ({"simulation": {"duration_s": 1e15}}, ["duration_s"]),
+        ({"simulation": {"time_step_s": 1e-4, "duration_s": 6000}}, ["6e+07 steps", "10,000,000"]),
+        ({"simulation": {"output_interval_s": 0.01, "time_step_s": 0.01}}, ["6e+05 stored rows"]),
+        ({"environment": {"steel_density_kg_m3": 1000}}, ["steel_density_kg_m3 = 1000", "1500"]),
+        ({"hull": {"point_masses": [{"node": 10**30, "mass_t": 1}]}}, ["point_masses[0].node"]),
+        ({"faults": [{"kind": "sling_break", "bag": "bag_1", "time_s": -1}]}, ["faults[0].time_s = -1"]),
+        ({"faults": [{"kind": "explode", "bag": "bag_1", "time_s": 1}]}, ["faults[0]", "unknown kind 'explode'"]),
+        ({"faults": [{"bag": "bag_1", "time_s": 1}]}, ["faults[0]", "needs a kind", "'sling_break'"]),
+        ({"lift": {"bags": [{"name": "b", "kind": "external", "node": 2, "x_z": 1}]}},
+         ["unknown key 'lift.bags[0].x_z'", "valid keys here are: name, kind, x_m"]),
+        ({"faults": [{"kind": "bag_rupture", "bag": "b", "time_s": 1, "leak": 3}]},
+         ["unknown key 'faults[0].leak'", "leak_time_s"]),
+        ({1: 2}, ["key 1 in the scenario is not a name"]),
+    ],
+)
+def test_values_out_of_range_name_key_value_and_range(data, needles):
+    _refused(data, *needles)
+
+
+def test_sizes_that_could_not_fit_are_exit_2(tmp_path, capsys):
+    for text, needle in (("hull:\n  elements: 1000000000\n", "hull.elements"),
+                         ("hull:\n  elements: 123456789012345678901234567890\n", "hull.elements"),
+                         ("hull:\n  bending_stiffness_Nm2: 1.0e-300\n", "bending_stiffness_Nm2")):
+        _cli_one_line(capsys, ["modes", str(_write(tmp_path, text)), "--json"], needle)
+
+
+def test_the_extremes_of_the_hull_ranges_still_compute(capsys):
+    # a long thin pipe and a short stiff heavy block: both at the ends of every hull range
+    import json
+
+    from flexlift.hull import hull_from_scenario
+    from flexlift.modes import compute_modes
+
+    for hull in ({"length_m": 20_000.0, "bending_stiffness_Nm2": 1e3, "displacement_t": None,
+                  "mass_per_length_kg_m": 0.01, "elements": 40},
+                 {"length_m": 1.0, "bending_stiffness_Nm2": 1e15, "displacement_t": 1e6, "breadth_m": 0.01,
+                  "elements": 2}):
+        modes = compute_modes(hull_from_scenario(parse_scenario({"hull": hull})))
+        assert np.all(np.isfinite(modes.omega)) and modes.omega[2] > 0
+    assert main(["modes", "--json"]) == 0
+    json.loads(capsys.readouterr().out)
+
+
+# --------------------------------------------------------------------------- names
+@pytest.mark.parametrize("name", [".", "..", "a/b", "a\\b", "a\nb", "a b", "x" * 101, "",
+                                  "tank\u00e9r", "\x00"])
+def test_bad_scenario_names(name):
+    _refused({"name": name}, "name = ", "letters, digits")
+
+
+@pytest.mark.parametrize("name", ["tanker", "my-ship_2.v1", ".hidden", "x" * 100, "..a", "a.."])
+def test_good_scenario_names(name):
+    assert parse_scenario({"name": name}).name == name
+
+
+def test_bag_and_fault_names_follow_the_same_rule():
+    _refused({"lift": {"bags": [{"name": "../x", "kind": "external", "node": 2}]}}, "lift.bags[0].name")
+    _refused({"faults": [{"kind": "sling_break", "bag": "b\n" * 10**5, "time_s": 1}]}, "faults[0].bag")
+
+
+def test_dot_names_cannot_reach_the_output_folder(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "keep.txt").write_text("mine")
+    p = _write(tmp_path, "name: ..\n")
+    _cli_one_line(capsys, ["run", str(p), "--quiet"], "name = '..'")
+    assert (tmp_path / "keep.txt").read_text() == "mine"
+    assert not (tmp_path / "flexlift-out").exists()
+
+
+# --------------------------------------------------------------------------- the README
+def _fmt(x) -> str:
+    if x == 2**63 - 1:
+        return "2⁶³−1"
+    if isinstance(x, float) and x.is_integer() and abs(x) < 1e5:
+        x = int(x)
+    if isinstance(x, int) and abs(x) < 1e5:
+        return str(x)
+    return f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+def _allowed(field) -> str:
+    """A field's range as the README writes it: [a, b], [a, b) or a..b (whole numbers)."""
+    cs = _constraints(field)
+    lo = [(c.ge, "[") for c in cs if isinstance(c, at.Ge)] + [(c.gt, "(") for c in cs if isinstance(c, at.Gt)]
+    hi = [(c.le, "]") for c in cs if isinstance(c, at.Le)] + [(c.lt, ")") for c in cs if isinstance(c, at.Lt)]
+    (low, lb), (high, hb) = max(lo), min(hi)
+    if "float" not in str(field.annotation):
+        return f"{_fmt(low)}..{_fmt(high)}"
+    return f"{lb}{_fmt(low)}, {_fmt(high)}{hb}"
+
+
+def _readme_rows() -> dict[str, str]:
+    """{dotted key: the 'allowed' cell of its row} of the README's scenario table."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    section = re.search(r"^## Scenario format\n(.*?)(?=^## )", text, flags=re.S | re.M).group(1)
+    out, prefix = {}, ""
+    for line in section.splitlines():
+        if not line.startswith("| ") or line.startswith(("|---", "| key ")):
+            continue
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", line.strip()[1:-1])]  # not at \|
+        assert len(cells) == 4, line
+        header = re.fullmatch(r"\*\*`([a-z_]+)(\.?)`\*\*", cells[0])
+        if header and header.group(2):
+            prefix = header.group(1) + "."
+            continue
+        keys, base = [], ""
+        for token in re.findall(r"`([^`]+)`", cells[0]):
+            if token.startswith("."):
+                keys.append(prefix + base + token[1:])
+            else:
+                base = token.rsplit(".", 1)[0] + "." if "." in token else ""
+                keys.append(("" if header else prefix) + token)
+        for k in keys:
+            out[k] = cells[2]
+    return out
+
+
+def test_the_readme_states_every_range():
+    rows = _readme_rows()
+    for label, (field, _) in SLOTS.items():
+        key = label.split("[0]")[0]
+        assert key in rows, f"README's scenario table has no row for {key}"
+        assert _allowed(field) in rows[key], f"README: {key} allows {_allowed(field)}, not {rows[key]!r}"
