@@ -598,3 +598,44 @@ def test_the_readme_states_every_range():
         key = label.split("[0]")[0]
         assert key in rows, f"README's scenario table has no row for {key}"
         assert _allowed(field) in rows[key], f"README: {key} allows {_allowed(field)}, not {rows[key]!r}"
+
+
+# --------------------------------------------------------------------------- the CLI's last line
+def _boom(exc):
+    def command(args):
+        raise exc
+
+    return command
+
+
+def test_an_input_error_with_a_newline_is_still_one_line(capsys, monkeypatch):
+    import flexlift.cli.loads as loads
+
+    monkeypatch.setattr(loads, "_main", _boom(InputError("lift.bags.x\ny", "a\u2028b", "ok\r")))
+    line = _cli_one_line(capsys, ["loads"], "lift.bags.x\\ny")
+    assert "\\u2028" in line and "\\r" in line
+
+
+@pytest.mark.parametrize("exc, code, needle", [
+    (MemoryError(), 1, "out of memory"),
+    (RuntimeError("solver\nexploded"), 1, "internal error: RuntimeError: solver\\nexploded"),
+])
+def test_unexpected_errors_are_one_line_and_exit_1(capsys, monkeypatch, exc, code, needle):
+    import flexlift.cli.loads as loads
+
+    monkeypatch.setattr(loads, "_main", _boom(exc))
+    assert main(["loads"]) == code
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err and "Traceback" not in err, err
+    assert main(["-v", "loads"]) == code  # -v: the traceback as well, for a bug report
+    assert "Traceback" in capsys.readouterr().err
+
+
+def test_a_numerics_failure_without_results_is_one_line_and_exit_1(capsys, monkeypatch):
+    import flexlift.cli.simulate as cs
+    from flexlift.errors import SimulationError
+
+    monkeypatch.setattr(cs, "_main", _boom(SimulationError("numerics failed at t = 3.0 s")))
+    assert main(["simulate"]) == 1
+    err = capsys.readouterr().err
+    assert err == "flexlift simulate: numerics failed at t = 3.0 s\n"

@@ -40,6 +40,8 @@ class SimulationError(RuntimeError):
 # ---------------------------------------------------------------------- one-line messages
 #: longest echo of a user's value in a message [characters]
 ECHO_LIMIT = 80
+#: longest whole message line the CLI prints [characters]
+LINE_LIMIT = 400
 
 _UNSAFE = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029\u200b-\u200f\u202a-\u202e\u2066-\u2069\ufeff]")
 
