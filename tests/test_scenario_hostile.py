@@ -166,7 +166,7 @@ def test_name_tanker_is_the_tanker(tmp_path, tanker):
 # --------------------------------------------------------------------------- YAML structure
 def test_deep_flow_nesting_is_one_line(tmp_path, capsys):
     p = _write(tmp_path, "hull: " + "[" * 3000 + "]" * 3000 + "\n")  # a RecursionError before
-    _refused(p, f"nesting deeper than {MAX_DEPTH} levels", "line 1")
+    _refused(p, f"nesting deeper than {MAX_DEPTH} levels at line 1", "a scenario needs at most 5")
     _cli_one_line(capsys, ["loads", str(p)], "nesting deeper")
 
 

@@ -321,7 +321,8 @@ def load_yaml(text: str, source: str):
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         problem = str(getattr(exc, "problem", None) or "not valid YAML")
         if "nesting depth" in problem:  # libyaml's own limit (1000 levels of [ or {)
-            raise _fail(source, f"nesting deeper than {MAX_DEPTH} levels{where}") from None
+            raise _fail(source, f"nesting deeper than {MAX_DEPTH} levels{where}; a scenario "
+                        "needs at most 5") from None
         raise _fail(source, f"malformed YAML{where}: {clean(str(problem), 120)}") from None
     finally:
         loader.dispose()
