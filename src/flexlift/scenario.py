@@ -5,6 +5,13 @@ name (``length_m``, ``displacement_t``, ``relief_pressure_bar``): tonnes, bar an
 allowed here, at the edge, and converted to SI by the stages that read them. Every section
 rejects unknown keys and lists the valid ones.
 
+Every number has a range (the comment beside each key says why; the README's table lists
+them): wide enough for the structures flexlift is meant for, from small pipes (EI ~1e5 N m^2)
+to the largest ships (EI ~1e14 N m^2, 20,000 elements), narrow enough that a value inside
+every range cannot exhaust the memory or break the numerics. Numbers are strict: an integer
+may be given for a real number, but never a boolean or text (``elements: true`` or
+``length_m: "78"`` are errors, not 1 and 78), and never NaN or infinity.
+
 Load with :func:`load_scenario` (a built-in name such as ``"tanker"`` or a path).
 """
 
@@ -16,22 +23,28 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Literal
 
-import yaml
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Field,
-    ValidationError,
-    field_validator,
-    model_validator,
-)
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from flexlift import constants as C
-from flexlift.errors import InputError
-
-Pos = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNeg = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-Fraction = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+from flexlift.errors import InputError, brief, clean
+from flexlift.scenario_errors import first_error, format_error
+from flexlift.scenario_file import decode, dump_yaml, load_yaml, read_bytes
+from flexlift.scenario_types import (
+    MAX_BAG_LIFT_T,
+    MAX_ELEMENTS,
+    MAX_ITEMS,
+    MAX_LENGTH_M,
+    MAX_MASS_T,
+    MAX_ROWS,
+    MAX_STEPS,
+    MAX_TIME_S,
+    Flag,
+    Name,
+    Real,
+    Text,
+    real,
+    whole,
+)
 
 
 class _Section(BaseModel):
@@ -42,20 +55,25 @@ class _Section(BaseModel):
 class Environment(_Section):
     """Site and physical constants."""
 
-    water_depth_m: Pos = 350.0  # depth of the seabed below the surface at the wreck
-    gravity_m_s2: Pos = C.G
-    seawater_density_kg_m3: Pos = C.RHO_SEAWATER
-    steel_density_kg_m3: Pos = C.RHO_STEEL
-    atmospheric_pressure_Pa: Pos = C.P_ATM
-    sea_temperature_K: Pos = C.T_SEA
+    water_depth_m: real(1, 11_000) = 350.0  # seabed depth; the deepest ocean is 10,935 m
+    gravity_m_s2: real(9.0, 10.5) = C.G  # Earth's is 9.76..9.84 (and the round 10 of hand checks)
+    seawater_density_kg_m3: real(990, 1250) = C.RHO_SEAWATER  # fresh water 998 .. Dead Sea 1240
+    steel_density_kg_m3: real(1500, 20_000) = C.RHO_STEEL  # concrete 2400, steel 7850, lead 11340
+    atmospheric_pressure_Pa: real(80_000, 110_000) = C.P_ATM  # sea-level records 87.0..108.4 kPa
+    sea_temperature_K: real(270, 310) = C.T_SEA  # -3 .. 37 degC
 
 
 # --------------------------------------------------------------------------- hull
 class PointMass(_Section):
     """A lumped mass at a node (1-based, from the aft end)."""
 
-    node: Annotated[int, Field(ge=1)]
-    mass_t: Pos
+    node: whole(1, MAX_ELEMENTS + 1)
+    mass_t: real(0.001, MAX_MASS_T)  # 1 kg .. the heaviest structure
+
+
+Length = real(0.1, MAX_LENGTH_M)
+MassPerLength = real(0.01, 2.0e6)  # [kg/m]: a thin cable ~0.1, the largest ships ~1.4e6
+Stiffness = real(1.0e3, 1.0e15)  # EI [N m^2]: small pipes ~1e5 .. the largest ships ~1e14
 
 
 class Hull(_Section):
@@ -66,21 +84,18 @@ class Hull(_Section):
     per element.
     """
 
-    length_m: Pos = 78.02  # length overall = beam length L
-    length_between_perpendiculars_m: Pos | None = 72.40
-    breadth_m: Pos = 12.0
-    depth_m: Pos = 5.4
-    elements: Annotated[int, Field(ge=1)] = 11
-    displacement_t: Pos | None = 3200.0
-    mass_per_length_kg_m: Pos | list[Pos] | None = None
-    bending_stiffness_Nm2: Pos | list[Pos] = 3.0e12
-    point_masses: list[PointMass] = []
-    frame_spacing_m: Pos = 0.57
-    ballast_tank_frames: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] = (
-        27,
-        113,
-    )
-    modal_damping: Annotated[float, Field(ge=0, lt=1)] = 0.02
+    length_m: real(1, MAX_LENGTH_M) = 78.02  # length overall = beam length L; 1 m .. a 20 km pipe
+    length_between_perpendiculars_m: Length | None = 72.40
+    breadth_m: real(0.01, 100) = 12.0  # a 10 mm cable .. the broadest ships (~70 m)
+    depth_m: real(0.01, 100) = 5.4
+    elements: whole(1, MAX_ELEMENTS) = 11
+    displacement_t: real(0.001, MAX_MASS_T) | None = 3200.0  # 1 kg .. the largest ships
+    mass_per_length_kg_m: MassPerLength | list[MassPerLength] | None = None
+    bending_stiffness_Nm2: Stiffness | list[Stiffness] = 3.0e12
+    point_masses: Annotated[list[PointMass], Field(max_length=MAX_ELEMENTS + 1)] = []
+    frame_spacing_m: real(0.1, 10) = 0.57  # ships' frames are 0.5..4 m apart
+    ballast_tank_frames: tuple[real(0, 100_000), real(0, 100_000)] = (27, 113)
+    modal_damping: Annotated[Real, Field(ge=0, lt=1)] = 0.02
 
     @model_validator(mode="after")
     def _check(self) -> Hull:
@@ -107,13 +122,16 @@ class Hull(_Section):
 
 
 # --------------------------------------------------------------------------- lift plan
+BagLift = real(0.01, MAX_BAG_LIFT_T)  # [t]: 10 kg pillow bags .. the largest built
+
+
 class CatalogueBag(_Section):
     """The lift bag as sold."""
 
-    diameter_m: Pos = 1.5
-    length_m: Pos = 18.0
-    lift_t: Pos = 565.0
-    working_pressure_bar: Pos = 2.8
+    diameter_m: real(0.05, 20) = 1.5
+    length_m: real(0.05, 50) = 18.0
+    lift_t: BagLift = 565.0
+    working_pressure_bar: real(0.1, 50) = 2.8
 
 
 class BagSpec(_Section):
@@ -123,12 +141,12 @@ class BagSpec(_Section):
     (cylindrical) bags act over a span: ``span_m`` = [x0, x1].
     """
 
-    name: Annotated[str, Field(min_length=1)]
+    name: Name
     kind: Literal["external", "internal"]
-    x_m: NonNeg | None = None
-    node: Annotated[int, Field(ge=1)] | None = None
-    span_m: tuple[NonNeg, NonNeg] | None = None
-    lift_t: Pos | None = None  # default: the plan's modelled lift per bag
+    x_m: real(0, MAX_LENGTH_M) | None = None
+    node: whole(1, MAX_ELEMENTS + 1) | None = None
+    span_m: tuple[real(0, MAX_LENGTH_M), real(0, MAX_LENGTH_M)] | None = None
+    lift_t: BagLift | None = None  # default: the plan's modelled lift per bag
 
     @model_validator(mode="after")
     def _check(self) -> BagSpec:
@@ -148,12 +166,12 @@ class BagSpec(_Section):
 class Lift(_Section):
     """How much lift, how many bags, where."""
 
-    breakout_factor: Annotated[float, Field(ge=1)] = 1.3  # required lift / wet weight
+    breakout_factor: real(1, 5) = 1.3  # required lift / wet weight; 1.3 typical, stiff clay ~2
     catalogue_bag: CatalogueBag = CatalogueBag()
-    internal_bags: Annotated[int, Field(ge=0)] = 3
-    layout_flexible_mode: Annotated[int, Field(ge=1)] = 3  # external bags at this flexible mode's nodes
-    bag_lift_t: Pos | None = None  # modelled lift per bag; default from the bag-count rule
-    bags: list[BagSpec] | None = None  # explicit layout instead of the automatic one
+    internal_bags: whole(0, MAX_ITEMS) = 3
+    layout_flexible_mode: whole(1, 100) = 3  # external bags at this flexible mode's nodes
+    bag_lift_t: BagLift | None = None  # modelled lift per bag; default from the bag-count rule
+    bags: Annotated[list[BagSpec], Field(max_length=MAX_ITEMS)] | None = None  # explicit layout
 
     @field_validator("bags")
     @classmethod
@@ -162,7 +180,7 @@ class Lift(_Section):
             names = [b.name for b in v]
             dup = sorted({n for n in names if names.count(n) > 1})
             if dup:
-                raise ValueError(f"bag names must be unique; repeated: {dup}")
+                raise ValueError(f"bag names must be unique; repeated: {brief(dup)}")
             if not v:
                 raise ValueError("bags, when given, must list at least one bag")
         return v
@@ -172,9 +190,9 @@ class Lift(_Section):
 class Gas(_Section):
     """Lift-bag gas and its valves (SPEC §5)."""
 
-    relief_pressure_bar: Pos = 0.1  # internal bags' over-pressure relief setting
-    fill_rate_max_m3_s: Pos = 0.5  # at the bag's local pressure
-    purge_rate_max_m3_s: Pos = 2.0  # at local pressure, valve fully open, bag full
+    relief_pressure_bar: real(0.001, 10) = 0.1  # internal bags' over-pressure relief setting
+    fill_rate_max_m3_s: real(1e-4, 100) = 0.5  # at the bag's local pressure
+    purge_rate_max_m3_s: real(1e-4, 100) = 2.0  # at local pressure, valve fully open, bag full
 
 
 # --------------------------------------------------------------------------- seabed
@@ -182,12 +200,12 @@ class Seabed(_Section):
     """Seabed contact and suction breakout (SPEC §6). H_0 = (breakout_factor - 1) W'."""
 
     holding_shape: Literal["linear", "uniform"] = "linear"
-    stern_ratio: NonNeg = 0.5  # holding force per length at the stern / mean (linear shape)
-    bow_ratio: NonNeg = 1.5  # at the bow / mean (linear shape)
-    breakout_time_s: Pos = 400.0  # T_b: a full pull breaks out in this time
-    release_time_s: Pos = 30.0  # tau_r: suction release after separation
-    contact_stiffness_N_m2: Pos = 5.0e6  # penalty spring per unit length [N/m per m]
-    contact_damping_Ns_m2: NonNeg = 2.0e6  # penalty damper per unit length [N s/m per m]
+    stern_ratio: real(0, 2) = 0.5  # holding force per length at the stern / mean (linear shape)
+    bow_ratio: real(0, 2) = 1.5  # at the bow / mean (linear shape); the two sum to 2
+    breakout_time_s: real(0.01, MAX_TIME_S) = 400.0  # T_b: a full pull breaks out in this time
+    release_time_s: real(0.001, MAX_TIME_S) = 30.0  # tau_r: suction release after separation
+    contact_stiffness_N_m2: real(1.0e3, 1.0e10) = 5.0e6  # penalty spring per unit length [N/m per m]
+    contact_damping_Ns_m2: real(0, 1.0e9) = 2.0e6  # penalty damper per unit length [N s/m per m]
 
     @model_validator(mode="after")
     def _check(self) -> Seabed:
@@ -205,48 +223,48 @@ class Seabed(_Section):
 class Hydro(_Section):
     """Drag and added mass (SPEC §6)."""
 
-    drag_coefficient: NonNeg = 1.2  # hull strip theory, on the breadth
-    bag_drag_coefficient: NonNeg = 1.0  # on the bag's frontal area
-    added_mass_coefficient: NonNeg = 1.0  # a33 = C_a rho pi B^2 / 4 per length
-    entrained_water_t: NonNeg = 0.0  # water in flooded compartments moving with the hull
+    drag_coefficient: real(0, 10) = 1.2  # hull strip theory, on the breadth (bluff bodies ~1-2)
+    bag_drag_coefficient: real(0, 10) = 1.0  # on the bag's frontal area
+    added_mass_coefficient: real(0, 10) = 1.0  # a33 = C_a rho pi B^2 / 4 per length
+    entrained_water_t: real(0, MAX_MASS_T) = 0.0  # water in flooded compartments moving with the hull
 
 
 # --------------------------------------------------------------------------- control
 class Supervisor(_Section):
     """The supervisory Mamdani controller (SPEC §7)."""
 
-    error_scale_m: Pos = 5.0
-    rate_scale_m_s: Pos = 0.1
-    volume_authority: Fraction = 0.15  # Delta V_max / bag capacity
+    error_scale_m: real(0.01, 10_000) = 5.0
+    rate_scale_m_s: real(0.001, 100) = 0.1
+    volume_authority: real(0, 1) = 0.15  # Delta V_max / bag capacity
     and_method: Literal["min", "prod"] = "min"
     or_method: Literal["max", "probor"] = "max"
     implication: Literal["min", "prod"] = "min"
     aggregation: Literal["max", "sum", "probor"] = "max"
     defuzzification: Literal["centroid", "bisector", "mom", "som", "lom"] = "centroid"
-    resolution: Annotated[int, Field(ge=11)] = 101
+    resolution: whole(11, 10_001) = 101  # points of the output universe (tables are built on it)
 
 
 class FillControl(_Section):
     """SIFSMC fill controller on the volume deficit."""
 
-    slope_1_s: Pos = 0.2  # lambda in s = de/dt + lambda e [1/s]
-    distance_scale_m3_s: Pos = 0.5  # signed distance that maps to a full command [m^3/s]
+    slope_1_s: real(1e-4, 1_000) = 0.2  # lambda in s = de/dt + lambda e [1/s]
+    distance_scale_m3_s: real(1e-4, 1_000) = 0.5  # signed distance giving a full command
 
 
 class PurgeControl(_Section):
     """PID purge controller on the volume excess; output valve opening in [0, 1]."""
 
-    kp_1_m3: NonNeg = 0.5
-    ki_1_m3s: NonNeg = 0.01
-    kd_s_m3: NonNeg = 0.0
+    kp_1_m3: real(0, 1.0e6) = 0.5
+    ki_1_m3s: real(0, 1.0e6) = 0.01
+    kd_s_m3: real(0, 1.0e6) = 0.0
 
 
 class Coordination(_Section):
     """Master controller for the ``coordinated`` mode."""
 
-    pitch_gain_m3_rad: NonNeg = 200.0
-    pitch_rate_gain_m3s_rad: NonNeg = 2000.0
-    shape_breakout_pull: bool = True
+    pitch_gain_m3_rad: real(0, 1.0e8) = 200.0
+    pitch_rate_gain_m3s_rad: real(0, 1.0e8) = 2000.0
+    shape_breakout_pull: Flag = True
 
 
 ControlMode = Literal["decentralized", "coordinated", "paper", "open-loop"]
@@ -256,41 +274,45 @@ class Control(_Section):
     """Ascent plan and the controllers (SPEC §7)."""
 
     mode: ControlMode = "decentralized"
-    sample_rate_Hz: Pos = 10.0
-    target_height_m: Pos = 300.0  # above the seabed
-    ascent_speed_m_s: Pos = 0.2
-    ascent_acceleration_m_s2: Pos = 0.002
-    breakout_pull_t: NonNeg = 150.0  # extra buoyancy held until the hull lifts off
-    volume_deadband_m3: NonNeg = 0.2  # |V_d - V| below this: neither fill nor purge
-    height_integral_gain_m2_s: NonNeg = 0.0  # adapted neutral volume per metre of error [m^3/(m s)]
-    measurement_filter_s: NonNeg = 0.0  # low-pass time constant of the measured height and speed
+    sample_rate_Hz: real(0.01, 1_000) = 10.0
+    target_height_m: real(0.01, 11_000) = 300.0  # above the seabed, below the surface
+    ascent_speed_m_s: real(0.001, 5) = 0.2  # planned; ascents are kept well below 1 m/s
+    ascent_acceleration_m_s2: real(1e-5, 1) = 0.002
+    breakout_pull_t: real(0, MAX_MASS_T) = 150.0  # extra buoyancy held until the hull lifts off
+    volume_deadband_m3: real(0, 10_000) = 0.2  # |V_d - V| below this: neither fill nor purge
+    height_integral_gain_m2_s: real(0, 100) = 0.0  # neutral volume adapted per m of error [m^3/(m s)]
+    measurement_filter_s: real(0, 1_000) = 0.0  # low-pass time constant of measured height, speed
     supervisor: Supervisor = Supervisor()
     fill: FillControl = FillControl()
     purge: PurgeControl = PurgeControl()
     coordination: Coordination = Coordination()
-    height_noise_m: NonNeg = 0.0
-    velocity_noise_m_s: NonNeg = 0.0
-    volume_noise_m3: NonNeg = 0.0
+    height_noise_m: real(0, 100) = 0.0
+    velocity_noise_m_s: real(0, 10) = 0.0
+    volume_noise_m3: real(0, 10_000) = 0.0
 
 
 class Limits(_Section):
     """Acceptance criteria (SPEC §1, §7)."""
 
-    ascent_velocity_m_s: Pos = 0.6
-    pitch_deg: Pos = 15.0
-    arrival_tolerance_m: Pos = 1.0
-    surface_clearance_m: NonNeg = 0.0  # a bag top closer than this to the surface breaches
+    ascent_velocity_m_s: real(0.001, 100) = 0.6
+    pitch_deg: real(0.01, 90) = 15.0
+    arrival_tolerance_m: real(0.001, 1_000) = 1.0
+    surface_clearance_m: real(0, 1_000) = 0.0  # a bag top closer than this to the surface breaches
 
 
 # --------------------------------------------------------------------------- faults
+Time = real(0, MAX_TIME_S)
+Duration = real(0.001, MAX_TIME_S)  # 1 ms .. 11.6 days
+
+
 class _Fault(_Section):
-    bag: str
-    time_s: NonNeg
+    bag: Name
+    time_s: Time
 
 
 class BagRupture(_Fault):
     kind: Literal["bag_rupture"]
-    leak_time_s: Pos = 5.0  # time constant of the gas escaping
+    leak_time_s: Duration = 5.0  # time constant of the gas escaping
 
 
 class SlingBreak(_Fault):
@@ -303,7 +325,7 @@ class SupplyFailure(_Fault):
 
 class SensorDrift(_Fault):
     kind: Literal["sensor_drift"]
-    rate_m_s: float = 0.01  # height measurement drift rate
+    rate_m_s: real(-10, 10) = 0.01  # height measurement drift rate
 
 
 class SensorStuck(_Fault):
@@ -312,7 +334,7 @@ class SensorStuck(_Fault):
 
 class SensorDropout(_Fault):
     kind: Literal["sensor_dropout"]
-    duration_s: Pos = 60.0
+    duration_s: Duration = 60.0
 
 
 Fault = Annotated[
@@ -324,30 +346,44 @@ Fault = Annotated[
 class Disturbance(_Section):
     """Optional environmental disturbance for robustness runs."""
 
-    current_m_s: float = 0.0  # uniform vertical current, positive up
-    force_noise_N_m: NonNeg = 0.0  # std of a random vertical line load, per unit length
-    noise_time_s: Pos = 10.0  # correlation time of the force noise
-    seed: int = 0
+    current_m_s: real(-5, 5) = 0.0  # uniform vertical current, positive up (real ones < 0.1)
+    force_noise_N_m: real(0, 1.0e6) = 0.0  # std of a random vertical line load, per unit length
+    noise_time_s: Duration = 10.0  # correlation time of the force noise
+    seed: whole(0, 2**63 - 1) = 0  # numpy's generators take non-negative seeds
 
 
 # --------------------------------------------------------------------------- simulation
 class Simulation(_Section):
     """The time-domain run (SPEC §8)."""
 
-    duration_s: Pos = 6000.0  # stops earlier once the target has been held for hold_time_s
-    hold_time_s: NonNeg = 600.0
-    time_step_s: Pos = 0.1  # integration step (at most the control period)
-    retained_flexible_modes: Annotated[int, Field(ge=0)] = 3
-    output_interval_s: Pos = 1.0
-    strength_interval_s: Pos = 10.0  # time spacing of stored shear/moment distributions
+    duration_s: Duration = 6000.0  # stops earlier once the target has been held for hold_time_s
+    hold_time_s: Time = 600.0
+    time_step_s: real(1.0e-4, 10) = 0.1  # integration step (at most the control period)
+    retained_flexible_modes: whole(0, 1_000) = 3
+    output_interval_s: Duration = 1.0
+    strength_interval_s: Duration = 10.0  # time spacing of stored shear/moment distributions
+
+    @model_validator(mode="after")
+    def _check(self) -> Simulation:
+        steps = self.duration_s / self.time_step_s
+        if steps > MAX_STEPS:
+            raise ValueError(
+                f"duration_s / time_step_s = {steps:.3g} steps; at most {MAX_STEPS:,} (shorten "
+                "the run or lengthen the step)")
+        rows = self.duration_s / max(self.output_interval_s, self.time_step_s)
+        if rows > MAX_ROWS:
+            raise ValueError(
+                f"duration_s / output_interval_s = {rows:.3g} stored rows; at most {MAX_ROWS:,} "
+                "(lengthen output_interval_s)")
+        return self
 
 
 # --------------------------------------------------------------------------- scenario
 class Scenario(_Section):
     """A whole lift: structure, site, lift plan, physics, control and simulation."""
 
-    name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.\-]+$")] = "tanker"
-    description: str = ""
+    name: Name = "tanker"  # names the output folder
+    description: Annotated[Text, Field(max_length=10_000)] = ""
     environment: Environment = Environment()
     hull: Hull = Hull()
     lift: Lift = Lift()
@@ -356,20 +392,21 @@ class Scenario(_Section):
     hydro: Hydro = Hydro()
     control: Control = Control()
     limits: Limits = Limits()
-    faults: list[Fault] = []
+    faults: Annotated[list[Fault], Field(max_length=MAX_ITEMS)] = []
     disturbance: Disturbance = Disturbance()
     simulation: Simulation = Simulation()
 
     @model_validator(mode="after")
     def _check(self) -> Scenario:
-        if self.control.target_height_m >= self.environment.water_depth_m:
+        env, sim = self.environment, self.simulation
+        if self.control.target_height_m >= env.water_depth_m:
             raise ValueError(
                 f"control.target_height_m {self.control.target_height_m} m must be below the "
-                f"water depth {self.environment.water_depth_m} m (the target is above the seabed)"
+                f"water depth {env.water_depth_m} m (the target is above the seabed)"
             )
-        if self.simulation.time_step_s > 1.0 / self.control.sample_rate_Hz + 1e-12:
+        if sim.time_step_s > 1.0 / self.control.sample_rate_Hz + 1e-12:
             raise ValueError(
-                f"simulation.time_step_s {self.simulation.time_step_s} s must not exceed the "
+                f"simulation.time_step_s {sim.time_step_s} s must not exceed the "
                 f"control period {1.0 / self.control.sample_rate_Hz} s"
             )
         return self
@@ -377,7 +414,7 @@ class Scenario(_Section):
     # ------------------------------------------------------------------ conveniences
     def to_yaml(self) -> str:
         """The scenario with every default filled in, as YAML (repeatable input)."""
-        return yaml.safe_dump(self.model_dump(mode="json"), sort_keys=False)
+        return dump_yaml(self.model_dump(mode="json"))
 
     def checksum(self) -> str:
         """SHA-256 of the canonical YAML: two runs with the same checksum had the same input."""
@@ -389,8 +426,11 @@ class Scenario(_Section):
         for key, value in dotted.items():
             node = data
             *path, last = key.split(".")
-            for p in path:
-                node = node[p]
+            for i, p in enumerate(path):
+                node = node.setdefault(p, {})  # an unknown section is reported by the schema
+                if not isinstance(node, dict):
+                    raise InputError(key, brief(value), f"{'.'.join(path[: i + 1])} is a value, "
+                                     "not a section with keys")
             node[last] = value
         return parse_scenario(data, source=f"{self.name} (modified)")
 
@@ -402,59 +442,43 @@ def builtin_names() -> list[str]:
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
 
 
-def _format_error(err: dict, source: str) -> str:
-    loc = ".".join(str(p) for p in err["loc"] if not str(p).startswith("function-"))
-    if err["type"] == "extra_forbidden":
-        # name the valid keys of the section that holds the unknown one
-        model: type[BaseModel] = Scenario
-        for part in err["loc"][:-1]:
-            field = model.model_fields.get(str(part)) if isinstance(part, str) else None
-            ann = getattr(field, "annotation", None) if field else None
-            model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else model
-        valid = ", ".join(model.model_fields)
-        return f"{source}: unknown key '{loc}'; valid keys here are: {valid}"
-    msg = err["msg"].removeprefix("Value error, ")
-    value = err.get("input")
-    if isinstance(value, dict):  # a check across a whole section: its message names the fields
-        return f"{source}: {loc + ': ' if loc else ''}{msg}"
-    return f"{source}: {loc or 'scenario'} = {value!r}: {msg}"
-
-
 def parse_scenario(data, source: str = "scenario") -> Scenario:
     """Validate a mapping as a :class:`Scenario`; raise :class:`InputError` with one line."""
-    if data is None:
-        data = {}
+    source = clean(str(source), 120)
     if not isinstance(data, dict):
-        raise InputError(source, type(data).__name__, "a scenario file must hold a YAML mapping")
+        raise InputError(source, brief(data, 40) if data is None else type(data).__name__,
+                         "a scenario must be a mapping of keys (name: ..., hull: ..., ...)")
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors()[0]
-        raise InputError.from_line(_format_error(first, source)) from None
+        err = first_error(exc.errors(include_url=False), Scenario)
+        raise InputError.from_line(format_error(err, source, Scenario)) from None
+
+
+#: what an empty file gets told
+EMPTY = ("the file is empty (or only comments); an empty scenario is not read as the tanker: "
+         "write `name: tanker` to start from the tanker's defaults")
 
 
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
-    """Load a built-in scenario by name (default ``tanker``) or a YAML file by path."""
+    """Load a built-in scenario by name (default ``tanker``) or a YAML file by path.
+
+    The file is read defensively (:mod:`flexlift.scenario_file`): a regular UTF-8 file of at
+    most 1 MB, one YAML document, no duplicate keys, bounded nesting and aliases; an empty
+    file is an error, not the tanker."""
     if name_or_path is None:
         name_or_path = "tanker"
-    text: str
-    source = str(name_or_path)
+    source = clean(str(name_or_path), 120)
     path = Path(name_or_path)
     if isinstance(name_or_path, str) and name_or_path in builtin_names() and not path.exists():
         text = (resources.files("flexlift") / "scenarios" / f"{name_or_path}.yaml").read_text()
     else:
-        if not path.is_file():
-            raise InputError(
-                "scenario",
-                source,
-                f"no such file; give a YAML path or a built-in name ({', '.join(builtin_names())})",
-            )
-        text = path.read_text(encoding="utf-8")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or "not valid YAML"
-        raise InputError.from_line(f"{source}: malformed YAML{where}: {problem}") from None
+        data = read_bytes(path, source, ", ".join(builtin_names()))
+        text = decode(data, source)
+    data = load_yaml(text, source)
+    if data is None:
+        raise InputError.from_line(f"{source}: {EMPTY}")
+    if not isinstance(data, dict):
+        raise InputError(source, type(data).__name__, "a scenario file must hold a YAML mapping "
+                         "of keys (name: ..., hull: ..., ...)")
     return parse_scenario(data, source=source)

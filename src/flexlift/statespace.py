@@ -344,9 +344,9 @@ def frequency_response(sys: ModalStateSpace, omega) -> np.ndarray:
     w = np.atleast_1d(np.asarray(omega, float))
     n_out, n_in = sys.D.shape
     m = sys.n_modes
-    Wd = (sys.c_disp.T[:, :, None] * sys.b[:, None, :]).reshape(m, -1)  # (m, o*i)
+    Wd = (sys.c_disp.T[:, :, None] * sys.b[:, None, :]).reshape(m, n_out * n_in)  # (m, o*i)
     has_v = bool(np.any(sys.c_vel))
-    Wv = (sys.c_vel.T[:, :, None] * sys.b[:, None, :]).reshape(m, -1) if has_v else None
+    Wv = (sys.c_vel.T[:, :, None] * sys.b[:, None, :]).reshape(m, n_out * n_in) if has_v else None
     w2 = sys.omega**2
     c = 2.0 * sys.zeta * sys.omega
     G = np.empty((w.size, n_out * n_in), complex)

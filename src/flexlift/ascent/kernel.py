@@ -377,7 +377,7 @@ def finish_step(t, A, R, W, X, rec, noise):
             R.H_rate[g] = rate
         R.H[g] = max(R.H[g], 0.0)
     separations(t, A, R, W, X, rec, noise)
-    breakouts(t, A, R, X, rec, R.H_old)
+    breakouts(t, A, R, X, rec)
 
 
 @jit
@@ -420,6 +420,7 @@ def separations(t, A, R, W, X, rec, noise):
             # held up to the separation, released exactly from it
             H_sep = R.H_old[g] + th * (R.H[g] - R.H_old[g])
             R.H[g] = released_holding(H_sep, (1.0 - th) * X.dt, A.release_time)
+            R.release[0, g], R.release[1, g] = t + th * X.dt, H_sep
     if not new.any():
         return
     R.q[:] = R.work[4]
@@ -439,15 +440,17 @@ def separations(t, A, R, W, X, rec, noise):
 
 
 @jit
-def breakouts(t, A, R, X, rec, H_old):
-    """Breakout is complete once every group's released hold is below 0.1 % of its H_0."""
+def breakouts(t, A, R, X, rec):
+    """Breakout is complete once every group's released hold is below 0.1 % of its H_0; the
+    time is where the exact release from the separation crosses that level."""
     for g in range(A.ng):
-        if R.sep[g] and not R.broken[g] and R.H[g] <= COMPLETE_FRACTION * A.H0[g]:
+        thr = COMPLETE_FRACTION * A.H0[g]
+        if R.sep[g] and not R.broken[g] and R.H[g] <= thr:
             R.broken[g] = True
-            thr = COMPLETE_FRACTION * A.H0[g]
-            tb = t
-            if thr > 0.0 and H_old[g] > thr:
-                tb = t + A.release_time * math.log(H_old[g] / thr)
+            t_sep, H_sep = R.release[0, g], R.release[1, g]
+            tb = t + X.dt
+            if thr > 0.0 and H_sep > thr:
+                tb = t_sep + A.release_time * math.log(H_sep / thr)
             if R.broken.all():
                 log_event(rec, tb, EV_BREAKOUT, -1, R.H.sum())
 

@@ -71,6 +71,7 @@ class RunState(NamedTuple):
     H: np.ndarray  # (ng,) holding force [N]
     sep: np.ndarray  # (ng,) bool: separated
     broken: np.ndarray  # (ng,) bool: breakout complete
+    release: np.ndarray  # (2, ng) when each group separated [s] and its hold then [N]
     H_rate: np.ndarray  # (ng,) last dH/dt while held [N/s]
     b_prev: np.ndarray  # (nr,) generalised force of the previous step
     fill: np.ndarray  # (nb,) fill command held [m^3/s]
@@ -163,7 +164,7 @@ def new_run_state(nr: int, nb: int, ns: int, ng: int) -> RunState:
     """A zero state (the loop sets the initial gas, holding force and equilibrium)."""
     z = np.zeros
     return RunState(z(nr), z(nr), z(nb), z(ng), np.zeros(ng, np.bool_), np.zeros(ng, np.bool_),
-                    z(ng), z(nr), z(nb), z(nb), np.full(nb, np.nan), z(nb), z(nb), z(nb), z(nb),
+                    np.full((2, ng), np.nan), z(ng), z(nr), z(nb), z(nb), np.full(nb, np.nan), z(nb), z(nb), z(nb), z(nb),
                     z(nb), np.zeros(2, np.int64), np.array([0.0, 0.0, np.nan, np.nan]),
                     z(nb), z(nb), z(nb), z(nb), z(ns), z(ns), z(ns), z(ns),
                     np.zeros(ns, np.bool_), np.zeros(ns, np.bool_), z(nb), z(nr),

@@ -7,7 +7,8 @@ taking the parsed ``argparse.Namespace`` and returning an exit code).
 Exit codes: 0 success, 1 a criterion failed or the numerics failed, 2 bad input (one line on
 stderr naming the field, the value and what is allowed; never a traceback), 130 interrupted
 (Ctrl-C), 143 terminated (SIGTERM). An interrupted or terminated command removes its
-half-built output and leaves the previous one intact.
+half-built output and leaves the previous one intact. An unexpected exception (a bug, or
+memory running out) is one line on stderr and exit 1; with ``-v`` its traceback is printed too.
 """
 
 from __future__ import annotations
@@ -17,9 +18,10 @@ import importlib
 import logging
 import signal
 import sys
+import traceback
 
 from flexlift import __version__
-from flexlift.errors import InputError
+from flexlift.errors import LINE_LIMIT, InputError, SimulationError, clean
 
 #: sub-command modules, in the order of the analysis
 COMMANDS = ("run", "modes", "loads", "reduce", "fuzzy", "simulate")
@@ -67,12 +69,27 @@ def main(argv: list[str] | None = None) -> int:
     try:
         code = int(args.func(args) or 0)
     except InputError as exc:  # bad input: this one line only, warnings dropped
-        sys.stderr.write(f"flexlift {args.command}: error: {exc}\n")
+        sys.stderr.write(f"flexlift {args.command}: error: {clean(str(exc), LINE_LIMIT)}\n")
         return 2
     except (KeyboardInterrupt, Terminated) as exc:
         how = "terminated" if isinstance(exc, Terminated) else "interrupted"
         sys.stderr.write(f"flexlift {args.command}: {how}; previous output left intact\n")
         return 143 if isinstance(exc, Terminated) else 130
+    except SimulationError as exc:  # the numerics failed with nothing to show
+        sys.stderr.write(f"flexlift {args.command}: {clean(str(exc), LINE_LIMIT)}\n")
+        return 1
+    except MemoryError:  # a size no check foresaw (an option's value, not the scenario)
+        if args.verbose:
+            traceback.print_exc()
+        sys.stderr.write(f"flexlift {args.command}: error: out of memory; use a smaller model "
+                         "or fewer output values\n")
+        return 1
+    except Exception as exc:  # last resort: a bug, reported on one line (-v: with traceback)
+        if args.verbose:
+            traceback.print_exc()
+        sys.stderr.write(f"flexlift {args.command}: internal error: {type(exc).__name__}: "
+                         f"{clean(str(exc), 200)} (please report it; -v shows the traceback)\n")
+        return 1
     finally:
         logging.getLogger("flexlift").removeHandler(held)
         if previous is not None:
