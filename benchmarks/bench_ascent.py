@@ -21,7 +21,7 @@ def _skfuzzy_engines():
     import skfuzzy as fuzz
     from skfuzzy import control as ctrl
 
-    from flexlift.rulebase import FILL_MAP, LABELS, SUPERVISOR_TABLE
+    from flexlift.fuzzy.rulebase import FILL_MAP, LABELS, SUPERVISOR_TABLE
 
     uni = np.linspace(-1, 1, 101)
     centres = np.linspace(-1, 1, 7)

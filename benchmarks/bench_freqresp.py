@@ -39,9 +39,9 @@ def _peak_bytes(fn) -> int:
 def run(quick: bool = False) -> dict:
     import control
 
-    from flexlift.hull import Hull
-    from flexlift.modes import compute_modes
-    from flexlift.statespace import frequency_response, modal_state_space, to_control
+    from flexlift.dynamics.statespace import frequency_response, modal_state_space, to_control
+    from flexlift.structure.hull import Hull
+    from flexlift.structure.modes import compute_modes
 
     n_freq = 10_000
     n_peer = 40 if quick else 400

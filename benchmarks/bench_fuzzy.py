@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexlift.fis import to_skfuzzy
+from flexlift.fuzzy.fis import to_skfuzzy
 
 
 def _per_call(fn, points, repeat=5):
@@ -37,7 +37,7 @@ def _per_call(fn, points, repeat=5):
 def run(quick: bool = False) -> dict:
     import warnings
 
-    from flexlift.rulebase import supervisor_fis
+    from flexlift.fuzzy.rulebase import supervisor_fis
 
     warnings.filterwarnings("ignore", category=DeprecationWarning)
     fis = supervisor_fis()
@@ -107,7 +107,7 @@ def _sugeno(quick: bool, rng) -> dict:
     sys.path.insert(0, str(root / "tests"))
     from fis_reference import evaluate
 
-    from flexlift.fis import read_fis
+    from flexlift.fuzzy.fis import read_fis
 
     fis = read_fis(root / "tests" / "data" / "fis" / "matlab" / "invkine1.fis")
     lo = np.array([v.range[0] for v in fis.inputs])

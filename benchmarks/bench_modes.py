@@ -18,10 +18,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from flexlift.beam import assemble, deformation_matrix, dof_scale, element_deformation
-from flexlift.hull import Hull
-from flexlift.modes import analytic_free_free_hz, compute_modes, rigid_modes
-from flexlift.modes_sparse import sparse_flexible
+from flexlift.structure.beam import assemble, deformation_matrix, dof_scale, element_deformation
+from flexlift.structure.eigen import sparse_flexible
+from flexlift.structure.hull import Hull
+from flexlift.structure.modes import analytic_free_free_hz, compute_modes, rigid_modes
 
 L, EI, MASS = 78.02, 3.0e12, 3.2e6 / 78.02
 N_MODES = 22  # 2 rigid + 20 flexible: "the lowest 20 modes" of the flexible hull
@@ -170,7 +170,7 @@ def run(quick: bool = False) -> dict:
     big = large_alone(n_big)
     every = all_modes(300)
     return {
-        "solver": "flexibility-form Lanczos (flexlift.modes_sparse), rigid modes exact",
+        "solver": "flexibility-form Lanczos (flexlift.structure.eigen), rigid modes exact",
         "peer": "scipy.linalg.eigh(K, M, subset_by_index=[0, 21]) on dense K, M",
         "compare": cmp,
         "large": big,

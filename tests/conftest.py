@@ -13,20 +13,20 @@ def tanker():
 
 @pytest.fixture(scope="session")
 def tanker_hull(tanker):
-    from flexlift.hull import hull_from_scenario
+    from flexlift.structure.hull import hull_from_scenario
 
     return hull_from_scenario(tanker)
 
 
 @pytest.fixture(scope="session")
 def tanker_modes(tanker_hull):
-    from flexlift.modes import compute_modes
+    from flexlift.structure.modes import compute_modes
 
     return compute_modes(tanker_hull)
 
 
 @pytest.fixture(scope="session")
 def tanker_plan(tanker, tanker_hull, tanker_modes):
-    from flexlift.liftplan import plan_lift
+    from flexlift.loads.liftplan import plan_lift
 
     return plan_lift(tanker, tanker_hull, tanker_modes)

@@ -5,7 +5,7 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from flexlift.beam import (
+from flexlift.structure.beam import (
     assemble,
     deformation_matrix,
     dof_scale,
@@ -14,7 +14,7 @@ from flexlift.beam import (
     element_stiffness,
     shape_functions,
 )
-from flexlift.hull import Hull
+from flexlift.structure.hull import Hull
 
 
 def test_element_stiffness_hand_values():

@@ -11,8 +11,8 @@ import pytest
 
 from flexlift.cli import main
 from flexlift.cli.fuzzy import run_stage
-from flexlift.fis import write_fis
-from flexlift.rulebase import supervisor_fis
+from flexlift.fuzzy.fis import write_fis
+from flexlift.fuzzy.rulebase import supervisor_fis
 
 
 def _json(capsys, argv):
@@ -71,7 +71,7 @@ def test_summary_files_and_run_stage(tmp_path, capsys, tanker):
 
 
 def test_grid_orientation_with_an_asymmetric_fis(tmp_path, capsys):
-    from flexlift.fuzzy import FIS, Rule
+    from flexlift.fuzzy.system import FIS, Rule
 
     base = supervisor_fis()
     only_e = FIS("only_e", base.inputs, base.output, tuple(Rule((i, None), i) for i in range(7)))
@@ -133,7 +133,7 @@ def test_any_real_fis_file(tmp_path, capsys):
     assert [o["name"] for o in s["outputs"]] == ["cold", "hot"] and "surface" not in s
     seven = str(CORPUS / "matlab" / "slcpp1.fis")  # Sugeno, seven inputs
     d = _json(capsys, ["fuzzy", "--fis", seven, "--eval", "0,0,0,0,0,0,1", "--json"])
-    from flexlift.fis import read_fis
+    from flexlift.fuzzy.fis import read_fis
     assert d["u"] == read_fis(seven)([0, 0, 0, 0, 0, 0, 1])
     assert main(["fuzzy", "--fis", seven, "--out", str(tmp_path / "o")]) == 0
     assert "sugeno, 7 inputs, 1 output" in capsys.readouterr().out

@@ -10,8 +10,8 @@ import pytest
 
 from flexlift.cli import main
 from flexlift.cli.modes import run_stage
-from flexlift.hull import hull_from_scenario
-from flexlift.modes import analytic_free_free_hz, compute_modes
+from flexlift.structure.hull import hull_from_scenario
+from flexlift.structure.modes import analytic_free_free_hz, compute_modes
 
 
 def run_json(capsys, *args):

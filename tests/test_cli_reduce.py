@@ -6,7 +6,7 @@ import pytest
 
 from flexlift.cli import main
 from flexlift.cli.reduce import run_stage
-from flexlift.reduce import METHODS
+from flexlift.dynamics.reduce import METHODS
 
 
 def _json(capsys, argv):

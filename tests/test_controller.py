@@ -7,8 +7,8 @@ from flexlift.ascent.plant import coupled_plant
 from flexlift.control.build import controller_for, fuzzy_maps, shaped_pull
 from flexlift.control.controller import sample
 from flexlift.control.reference import trapezoid
-from flexlift.lookup import Table2D
-from flexlift.rulebase import supervisor_fis
+from flexlift.fuzzy.rulebase import supervisor_fis
+from flexlift.fuzzy.tables import Table2D
 
 
 def test_trapezoid_reaches_target_gently():

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from flexlift.errors import InputError
-from flexlift.fis import from_fis_text, read_fis, to_fis_text, write_fis
-from flexlift.fuzzy import FIS, MF, Rule, Variable
-from flexlift.rulebase import fill_fis, supervisor_fis
+from flexlift.fuzzy.fis import from_fis_text, read_fis, to_fis_text, write_fis
+from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis
+from flexlift.fuzzy.system import FIS, MF, Rule, Variable
 
 # MATLAB's shipped example tipper.fis, as MATLAB writes it
 TIPPER = """[System]
@@ -191,8 +191,8 @@ def test_parameter_arithmetic_as_matlab_evaluates_it():
 
 
 def test_to_skfuzzy_refuses_what_scikit_fuzzy_cannot_mirror():
-    from flexlift.fis import to_skfuzzy
-    from flexlift.rulebase import fill_fis, supervisor_fis
+    from flexlift.fuzzy.fis import to_skfuzzy
+    from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis
 
     sim, out = to_skfuzzy(supervisor_fis())
     sim.input["e"], sim.input["edot"] = 0.3, -0.2

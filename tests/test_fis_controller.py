@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from flexlift.errors import InputError
-from flexlift.fis import load_controller_fis, write_fis
-from flexlift.fuzzy import FIS, MF, Rule, Variable
-from flexlift.rulebase import fill_fis, supervisor_fis
+from flexlift.fuzzy.fis import load_controller_fis, write_fis
+from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis
+from flexlift.fuzzy.system import FIS, MF, Rule, Variable
 
 CORPUS = Path(__file__).parent / "data" / "fis"
 Q = np.random.default_rng(3).uniform(-1, 1, (200, 2))

@@ -11,7 +11,7 @@ import pytest
 from fis_reference import evaluate
 
 from flexlift.errors import InputError
-from flexlift.fis import read_fis, write_fis
+from flexlift.fuzzy.fis import read_fis, write_fis
 
 CORPUS = Path(__file__).parent / "data" / "fis"
 

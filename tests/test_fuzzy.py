@@ -7,7 +7,7 @@ import pytest
 import skfuzzy
 
 from flexlift.errors import InputError
-from flexlift.fuzzy import (
+from flexlift.fuzzy.system import (
     FIS,
     MF,
     Rule,

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from flexlift.errors import InputError
-from flexlift.rulebase import supervisor_fis
+from flexlift.fuzzy.rulebase import supervisor_fis
 
 
 @pytest.mark.parametrize("and_method", ["min", "prod"])

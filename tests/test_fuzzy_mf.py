@@ -9,7 +9,7 @@ import skfuzzy
 from fis_reference import membership
 
 from flexlift.errors import InputError
-from flexlift.fuzzy import (
+from flexlift.fuzzy.system import (
     MF,
     MF_KINDS,
     dsigmf,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from fis_reference import evaluate
 
-from flexlift.fuzzy import (
+from flexlift.fuzzy.system import (
     AGGREGATIONS,
     AND_METHODS,
     FIS,

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from flexlift.errors import InputError
-from flexlift.fis import from_fis_text
-from flexlift.fuzzy import FIS, MF, Rule, Variable
+from flexlift.fuzzy.fis import from_fis_text
+from flexlift.fuzzy.system import FIS, MF, Rule, Variable
 
 # x in [0, 1] with L = trimf(-1, 0, 1), H = trimf(0, 1, 2); z in [0, 4] (no sets: used only in
 # the linear output). At x = 0.25: L = .75, H = .25.

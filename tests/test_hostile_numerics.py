@@ -25,8 +25,8 @@ def test_release_within_the_separation_step_records_the_breakout(tanker):
 def test_an_order_0_model_has_its_feedthrough_as_its_response(tanker_modes):
     """A model of flexible modes reduced to order 0 is its static gain D (the frequency
     response crashed reshaping an empty array)."""
-    from flexlift.reduce import reduce_model
-    from flexlift.statespace import (
+    from flexlift.dynamics.reduce import reduce_model
+    from flexlift.dynamics.statespace import (
         frequency_response,
         impulse_response,
         modal_state_space,

@@ -5,13 +5,13 @@ from __future__ import annotations
 import math
 
 import pytest
+from flexlift.loads.liftplan import bag_count, plan_lift
 
 from flexlift import constants as C
 from flexlift.errors import InputError
-from flexlift.hull import hull_from_scenario
-from flexlift.liftplan import bag_count, plan_lift
-from flexlift.modes import compute_modes, zero_crossings
 from flexlift.scenario import load_scenario
+from flexlift.structure.hull import hull_from_scenario
+from flexlift.structure.modes import compute_modes, zero_crossings
 
 T = C.TONNE * 9.81  # one tonne-force [N]
 

@@ -7,10 +7,8 @@ import pytest
 from scipy.integrate import quad
 
 from flexlift import constants as C
-from flexlift.beam import assemble
 from flexlift.errors import InputError
-from flexlift.hull import Hull
-from flexlift.loads import (
+from flexlift.loads.strength import (
     LineLoad,
     LoadCase,
     PointLoad,
@@ -25,6 +23,8 @@ from flexlift.loads import (
     shear_moment,
     strength,
 )
+from flexlift.structure.beam import assemble
+from flexlift.structure.hull import Hull
 
 L = 78.02
 EI = 3.0e12

@@ -5,11 +5,12 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from flexlift.beam import assemble, deformation_matrix, dof_scale, element_deformation
-from flexlift.convergence import convergence_rate, convergence_study, is_uniform
 from flexlift.errors import InputError
-from flexlift.hull import Hull
-from flexlift.modes import (
+from flexlift.structure.beam import assemble, deformation_matrix, dof_scale, element_deformation
+from flexlift.structure.convergence import convergence_rate, convergence_study, is_uniform
+from flexlift.structure.eigen import sparse_flexible
+from flexlift.structure.hull import Hull
+from flexlift.structure.modes import (
     BETA_L_FREE_FREE,
     analytic_free_free_hz,
     compute_modes,
@@ -17,7 +18,6 @@ from flexlift.modes import (
     rigid_modes,
     zero_crossings,
 )
-from flexlift.modes_sparse import sparse_flexible
 
 
 def rough(n=12, seed=3):

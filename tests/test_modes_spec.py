@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import flexlift.modes_sparse as modes_sparse
-from flexlift.beam import assemble, deformation_matrix, dof_scale, element_deformation
+import flexlift.structure.eigen as modes_sparse
 from flexlift.cli import main
-from flexlift.hull import Hull
-from flexlift.modes import analytic_free_free_hz, compute_modes, rigid_modes
-from flexlift.modes_sparse import GRAM_TOL, flexibility_flexible, orthonormalised
+from flexlift.structure.beam import assemble, deformation_matrix, dof_scale, element_deformation
+from flexlift.structure.eigen import GRAM_TOL, flexibility_flexible, orthonormalised
+from flexlift.structure.hull import Hull
+from flexlift.structure.modes import analytic_free_free_hz, compute_modes, rigid_modes
 
 L, EI, MASS = 78.02, 3.0e12, 3.2e6 / 78.02
 
@@ -100,7 +100,7 @@ def test_unresolved_modes_are_dropped_and_reported(monkeypatch, caplog):
     # resolves only the lowest ~100 modes of 300 elements: the rest are not returned
     monkeypatch.setattr(modes_sparse, "DENSE_MAX_DOF", 0)
     hull = uniform(300)
-    with caplog.at_level(logging.WARNING, logger="flexlift.modes"):
+    with caplog.at_level(logging.WARNING, logger="flexlift.structure.modes"):
         modes = compute_modes(hull)
     assert modes.n_requested == 602
     assert 50 < modes.n_modes < 300

@@ -6,8 +6,7 @@ import warnings
 import numpy as np
 import pytest
 
-from flexlift.errors import InputError
-from flexlift.reduce import (
+from flexlift.dynamics.reduce import (
     METHODS,
     compare,
     kept_modes,
@@ -16,7 +15,7 @@ from flexlift.reduce import (
     reduce_model,
     truncate,
 )
-from flexlift.statespace import (
+from flexlift.dynamics.statespace import (
     ModalStateSpace,
     bag_siso,
     bag_state_space,
@@ -26,6 +25,7 @@ from flexlift.statespace import (
     mode_gains,
     to_control,
 )
+from flexlift.errors import InputError
 
 ZETA = 0.02
 W_CHECK = np.array([0.7, 12.0, 95.0, 410.0, 2600.0])  # rad/s, away from the poles

@@ -7,8 +7,8 @@ import pytest
 import skfuzzy
 
 from flexlift.errors import InputError
-from flexlift.fis import to_skfuzzy
-from flexlift.rulebase import LABELS, SUPERVISOR_TABLE, fill_fis, supervisor_fis
+from flexlift.fuzzy.fis import to_skfuzzy
+from flexlift.fuzzy.rulebase import LABELS, SUPERVISOR_TABLE, fill_fis, supervisor_fis
 
 
 @pytest.fixture(scope="module")
@@ -162,7 +162,7 @@ def test_fill_map_monotone_by_construction_whatever_the_rounding():
         v = np.asarray(exact(x), dtype=float)
         return v + 1e-15 * rng.standard_normal(v.shape)
 
-    from flexlift.rulebase import FillMap
+    from flexlift.fuzzy.rulebase import FillMap
 
     fill = FillMap(wiggly)
     d = np.linspace(-1.5, 1.5, 30001)

@@ -502,8 +502,8 @@ def test_the_extremes_of_the_hull_ranges_still_compute(capsys):
     # a long thin pipe and a short stiff heavy block: both at the ends of every hull range
     import json
 
-    from flexlift.hull import hull_from_scenario
-    from flexlift.modes import compute_modes
+    from flexlift.structure.hull import hull_from_scenario
+    from flexlift.structure.modes import compute_modes
 
     for hull in ({"length_m": 20_000.0, "bending_stiffness_Nm2": 1e3, "displacement_t": None,
                   "mass_per_length_kg_m": 0.01, "elements": 40},

@@ -6,9 +6,7 @@ import pytest
 import scipy.linalg as sla
 import scipy.signal as sig
 
-from flexlift.beam import assemble
-from flexlift.errors import InputError
-from flexlift.statespace import (
+from flexlift.dynamics.statespace import (
     ModalStateSpace,
     bag_siso,
     bag_state_space,
@@ -24,6 +22,8 @@ from flexlift.statespace import (
     step_response,
     to_control,
 )
+from flexlift.errors import InputError
+from flexlift.structure.beam import assemble
 
 ZETA = 0.02
 

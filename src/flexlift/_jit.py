@@ -25,7 +25,7 @@ __all__ = ["jit"]
 
 _PACKAGE = Path(__file__).resolve().parent
 #: the modules whose code the compiled loop contains
-_COMPILED = ("_jit.py", "_struct.py", "lookup.py", "physics", "control", "ascent")
+_COMPILED = ("_jit.py", "_struct.py", "fuzzy/tables.py", "physics", "control", "ascent")
 
 
 def _sources_stamp() -> str:

@@ -9,9 +9,9 @@ frequencies is numerical.
 import numpy as np
 import pytest
 
-from flexlift.beam import assemble
-from flexlift.hull import Hull
-from flexlift.modes import (
+from flexlift.structure.beam import assemble
+from flexlift.structure.hull import Hull
+from flexlift.structure.modes import (
     BETA_L_FREE_FREE,
     analytic_free_free_hz,
     compute_modes,

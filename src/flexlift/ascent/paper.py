@@ -1,7 +1,7 @@
 """The paper's configuration (SPEC §8) as a plant: every external bag on its own 4-state model.
 
 Each external bag i sees only the unsorted-mdc 4-state model of
-:func:`flexlift.reduce.paper_bag_model` (the wet hull's two rigid modes at the bag's node; the
+:func:`flexlift.dynamics.reduce.paper_bag_model` (the wet hull's two rigid modes at the bag's node; the
 flexible modes folded into the feedthrough D) from the vertical force at its node to the
 displacement there, with no coupling to the other bags. In :class:`~flexlift.ascent.plant.
 PlantArrays` form that is two modal coordinates per bag, one strip per bag (its tributary
@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexlift.ascent.plant import Plant, PlantArrays, coupled_plant
-from flexlift.reduce import paper_bag_model
+from flexlift.dynamics.reduce import paper_bag_model
 
 
 def tributary(x: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:

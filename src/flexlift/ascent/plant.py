@@ -29,12 +29,12 @@ from typing import NamedTuple
 import numpy as np
 
 from flexlift import constants as C
-from flexlift.beam import assemble
 from flexlift.errors import InputError
-from flexlift.hull import Hull, hull_from_scenario
-from flexlift.liftplan import LiftPlan, plan_lift
-from flexlift.modes import Modes, compute_modes
+from flexlift.loads.liftplan import LiftPlan, plan_lift
 from flexlift.physics import gas, hydro, seabed
+from flexlift.structure.beam import assemble
+from flexlift.structure.hull import Hull, hull_from_scenario
+from flexlift.structure.modes import Modes, compute_modes
 
 
 class PlantArrays(NamedTuple):

@@ -6,14 +6,14 @@ laws the simulation integrates (:mod:`flexlift.physics`): submerged weight, iner
 structural and added mass, hull drag, seabed contact, the released suction, the force noise,
 the internal bags' buoyancy over their spans; and point loads: the external bags' buoyancy
 with their drag, and the point masses with their inertia. Shear and moment follow by statics
-(:func:`flexlift.loads.shear_moment`).
+(:func:`flexlift.loads.strength.shear_moment`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from flexlift.loads import shear_moment
+from flexlift.loads.strength import shear_moment
 from flexlift.physics import gas, hydro, seabed
 
 #: most grid points along the structure (fine meshes are sampled more coarsely)

@@ -36,11 +36,11 @@ from flexlift.cli._common import (
     writing,
 )
 from flexlift.errors import InputError
-from flexlift.fis import read_fis, to_fis_text
-from flexlift.fuzzy import FIS
+from flexlift.fuzzy.fis import read_fis, to_fis_text
+from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis_from
+from flexlift.fuzzy.system import FIS
 from flexlift.output.files import write_text
-from flexlift.outputs import Figure, StageOutput, Table
-from flexlift.rulebase import fill_fis, supervisor_fis_from
+from flexlift.output.stage import Figure, StageOutput, Table
 
 NAME = "fuzzy"
 SURFACE_GRID = 81  # the table the simulation may use instead of exact inference
@@ -189,8 +189,8 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
 
 
 def _write(out: Path, fis: FIS, tables: list[Table], builtin: bool) -> list[Figure]:
-    from flexlift.plots._style import save
-    from flexlift.plots.fuzzy import (
+    from flexlift.output.plots._style import save
+    from flexlift.output.plots.fuzzy import (
         plot_map,
         plot_memberships,
         plot_surface_3d,

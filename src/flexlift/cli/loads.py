@@ -19,12 +19,12 @@ from flexlift.cli._common import (
     scenario_from,
     writing,
 )
-from flexlift.hull import hull_from_scenario
-from flexlift.liftplan import LiftPlan, plan_lift
-from flexlift.loads import Strength, lift_load_case, strength
-from flexlift.modes import compute_modes
+from flexlift.loads.strength import Strength, lift_load_case, strength
+from flexlift.loads.liftplan import LiftPlan, plan_lift
 from flexlift.output.files import write_text
-from flexlift.outputs import Figure, StageOutput, Table
+from flexlift.output.stage import Figure, StageOutput, Table
+from flexlift.structure.hull import hull_from_scenario
+from flexlift.structure.modes import compute_modes
 
 log = logging.getLogger(__name__)
 
@@ -153,8 +153,8 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
     tables = _tables(summary)
     figures: list[Figure] = []
     if out is not None:
-        from flexlift.plots._style import save
-        from flexlift.plots.loads import load_diagram, shear_moment_figure
+        from flexlift.output.plots._style import save
+        from flexlift.output.plots.loads import load_diagram, shear_moment_figure
 
         out = Path(out)
         fdir, tdir = out / "figures", out / "tables"

@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 
-from flexlift.beam import assemble
 from flexlift.cli._common import (
     add_json_arg,
     add_out_arg,
@@ -22,12 +21,13 @@ from flexlift.cli._common import (
     scenario_from,
     writing,
 )
-from flexlift.convergence import Convergence, convergence_study, is_uniform
 from flexlift.errors import InputError
-from flexlift.hull import hull_from_scenario
-from flexlift.modes import Modes, analytic_free_free_hz, compute_modes, mode_nodes
 from flexlift.output.files import write_text
-from flexlift.outputs import Figure, StageOutput, Table
+from flexlift.output.stage import Figure, StageOutput, Table
+from flexlift.structure.beam import assemble
+from flexlift.structure.convergence import Convergence, convergence_study, is_uniform
+from flexlift.structure.hull import hull_from_scenario
+from flexlift.structure.modes import Modes, analytic_free_free_hz, compute_modes, mode_nodes
 
 NAME = "modes"
 #: flexible modes whose nodes are reported (modes 3..7 overall)
@@ -88,7 +88,7 @@ def summary_of(scenario, modes: Modes, conv: Convergence | None, solver: str) ->
         "solver": "sparse" if solver == "auto" else solver,
         "frequencies_hz": [float(f) for f in modes.frequencies_hz],
         "rigid_modes": modes.n_rigid,
-        # the solver returns only the modes it resolves to SPEC section 2 (flexlift.modes)
+        # the solver returns only the modes it resolves to SPEC section 2 (flexlift.structure.modes)
         "modes_requested": modes.n_requested or modes.n_modes,
         "modes_resolved": modes.n_modes,
         "mode_nodes": _nodes_of(modes),
@@ -151,7 +151,7 @@ def run_stage(
 
     elements : re-mesh with this many equal elements (default: the scenario's) [-]
     n_modes : total modes, rigid included (default: all up to 400 elements, else 22) [-]
-    solver : "auto", "sparse" or "dense" (see :func:`flexlift.modes.compute_modes`)
+    solver : "auto", "sparse" or "dense" (see :func:`flexlift.structure.modes.compute_modes`)
     convergence : also run the convergence study on the scenario's hull
     """
     base = hull_from_scenario(scenario)
@@ -177,8 +177,8 @@ def run_stage(
         )
     figures: list[Figure] = []
     if out is not None:
-        from flexlift.plots._style import save
-        from flexlift.plots.modes import plot_convergence, plot_frequencies, plot_mode_shapes
+        from flexlift.output.plots._style import save
+        from flexlift.output.plots.modes import plot_convergence, plot_frequencies, plot_mode_shapes
 
         out = Path(out)
         fdir, tdir = out / "figures", out / "tables"

@@ -26,19 +26,26 @@ from flexlift.cli._common import (
     scenario_from,
     writing,
 )
-from flexlift.hull import hull_from_scenario
-from flexlift.liftplan import plan_lift
-from flexlift.modes import compute_modes
-from flexlift.output.files import write_text
-from flexlift.outputs import Figure, StageOutput, Table
-from flexlift.reduce import DEFAULT_ORDER, METHODS, Comparison, compare, kept_modes, reduce_all
-from flexlift.statespace import (
+from flexlift.dynamics.reduce import (
+    DEFAULT_ORDER,
+    METHODS,
+    Comparison,
+    compare,
+    kept_modes,
+    reduce_all,
+)
+from flexlift.dynamics.statespace import (
     bag_siso,
     default_omega_lo,
     flexible_dc_gain,
     gain_ranking,
     mode_gains,
 )
+from flexlift.loads.liftplan import plan_lift
+from flexlift.output.files import write_text
+from flexlift.output.stage import Figure, StageOutput, Table
+from flexlift.structure.hull import hull_from_scenario
+from flexlift.structure.modes import compute_modes
 
 log = logging.getLogger(__name__)
 
@@ -190,9 +197,9 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
     )
     figures: list[Figure] = []
     if out is not None:
-        from flexlift.plots._style import save
-        from flexlift.plots.reduce import plot_bode, plot_gains, plot_time
-        from flexlift.reduce import band_grid
+        from flexlift.dynamics.reduce import band_grid
+        from flexlift.output.plots._style import save
+        from flexlift.output.plots.reduce import plot_bode, plot_gains, plot_time
 
         b, models, cmp, gains = first
         full = models["full"]

@@ -16,8 +16,8 @@ from pathlib import Path
 from flexlift import __version__
 from flexlift.cli._common import add_scenario_arg, emit_json, scenario_from
 from flexlift.output import output_folder, write_json, write_text
-from flexlift.outputs import StageOutput
-from flexlift.report import STAGE_TITLES, render_report
+from flexlift.output.report import STAGE_TITLES, render_report
+from flexlift.output.stage import StageOutput
 from flexlift.scenario import ControlMode
 
 STAGES = ("modes", "loads", "reduce", "fuzzy", "simulate")

@@ -22,7 +22,7 @@ from flexlift.cli._common import (
     writing,
 )
 from flexlift.errors import SimulationError
-from flexlift.outputs import Figure, StageOutput, Table
+from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.scenario import ControlMode
 
 MODES = typing.get_args(ControlMode)
@@ -41,9 +41,9 @@ def add_parser(sub) -> None:
 
 
 def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
+    from flexlift.output.plots import ascent
+    from flexlift.output.plots._style import save
     from flexlift.output.results import save_netcdf, to_csv
-    from flexlift.plots import ascent
-    from flexlift.plots._style import save
 
     save_netcdf(result, out / "data" / f"simulate_{mode}.nc")
     if primary:
@@ -91,9 +91,9 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
 
 def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
     """One figure comparing the control modes simulated into ``out`` by :func:`run_stage`."""
+    from flexlift.output.plots import ascent
+    from flexlift.output.plots._style import save
     from flexlift.output.results import load_netcdf
-    from flexlift.plots import ascent
-    from flexlift.plots._style import save
 
     modes = [o.name.split(":", 1)[1] for o in outputs]
     rows = [[m, o.summary["max_pitch_deg"], o.summary["max_ascent_velocity_ms"],

@@ -9,7 +9,7 @@ import numpy as np
 from flexlift import constants as C
 from flexlift.control.controller import MODE_CODES, ControlArrays, ControlState, new_state
 from flexlift.errors import InputError
-from flexlift.lookup import Table2D
+from flexlift.fuzzy.tables import Table2D
 
 #: grid of the supervisor's lookup table over [-1, 1]^2
 TABLE_GRID = 201
@@ -31,7 +31,7 @@ def shaped_pull(total: float, x_bags, x_centroid: float) -> np.ndarray:
 
 def supervisor_fis_of(scenario):
     """The scenario's supervisory fuzzy system (the built-in rule base, its operators)."""
-    from flexlift.rulebase import supervisor_fis_from
+    from flexlift.fuzzy.rulebase import supervisor_fis_from
 
     return supervisor_fis_from(scenario.control.supervisor)
 
@@ -40,14 +40,14 @@ def supervisor_fis_of(scenario):
 def _supervisor_table(settings) -> Table2D:
     """The supervisor of ``control.supervisor`` settings sampled into a lookup table (once
     per settings: 40,401 exact evaluations take ~0.2 s)."""
-    from flexlift.rulebase import supervisor_fis_from
+    from flexlift.fuzzy.rulebase import supervisor_fis_from
 
     return Table2D.sample(supervisor_fis_from(settings), TABLE_GRID)
 
 
 @functools.lru_cache(maxsize=1)
 def _fill_map():
-    from flexlift.rulebase import fill_fis
+    from flexlift.fuzzy.rulebase import fill_fis
 
     return fill_fis()
 
@@ -57,7 +57,7 @@ def fuzzy_maps(scenario, engine="table"):
     "table" (the supervisor sampled into a lookup table, default), "exact" (exact inference,
     evaluated outside the compiled loop at every sample), a callable supervisor (points (n, 2)
     -> u (n,)), or a pair (supervisor, fill) of callables."""
-    from flexlift.rulebase import FillMap
+    from flexlift.fuzzy.rulebase import FillMap
 
     fill = _fill_map()
     if isinstance(engine, str):

@@ -39,7 +39,7 @@ import numpy as np
 from flexlift._jit import jit
 from flexlift._struct import as_struct
 from flexlift.control.reference import trapezoid
-from flexlift.lookup import bilinear, linear
+from flexlift.fuzzy.tables import bilinear, linear
 
 #: time constant of the filter on the volume-deficit derivative of the SIFSMC [s]
 DERIV_TAU = 1.0

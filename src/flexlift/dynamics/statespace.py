@@ -27,10 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexlift.beam import shape_functions
 from flexlift.errors import InputError
-from flexlift.hull import Hull
-from flexlift.modes import Modes
+from flexlift.structure.beam import shape_functions
+from flexlift.structure.hull import Hull
+from flexlift.structure.modes import Modes
 
 log = logging.getLogger(__name__)
 
@@ -214,7 +214,7 @@ def modal_state_space(modes: Modes, inputs: Sequence, outputs: Sequence[str], ze
     inputs : names ("f_node_N", "f_bag_NAME") or (name, force vector (N_dof,)) pairs [N]
     outputs : names ("w_node_N", "v_node_N", "theta_node_N", "w_bag_NAME", "v_bag_NAME")
     zeta : damping ratio of every flexible mode, or one per mode (rigid entries 0) [-]
-    bags : the :class:`~flexlift.liftplan.Bag` objects that "bag" names refer to
+    bags : the :class:`~flexlift.loads.liftplan.Bag` objects that "bag" names refer to
     """
     hull = modes.hull
     if isinstance(bags, Mapping):

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexlift.plots._style import new_figure
-from flexlift.statespace import (
+from flexlift.dynamics.statespace import (
     ModalStateSpace,
     frequency_response,
     impulse_response,
     step_response,
 )
+from flexlift.output.plots._style import new_figure
 
 _STYLE = {
     "full": dict(color="k", lw=2.2, alpha=0.5, label="full"),
@@ -31,7 +31,7 @@ def _style(name: str) -> dict:
 def plot_gains(sys: ModalStateSpace, gains: np.ndarray, omega_lo: float, title: str = ""):
     """Per-mode gains [m/N]: against mode number, against frequency, and sorted.
 
-    gains : (m,) from :func:`flexlift.statespace.mode_gains`; omega_lo [rad/s]
+    gains : (m,) from :func:`flexlift.dynamics.statespace.mode_gains`; omega_lo [rad/s]
     """
     fig, ax = new_figure(1, 3, figsize=(11.0, 3.8))
     rigid = sys.rigid

@@ -27,9 +27,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
-from flexlift.scenario_errors import first_error, format_error
-from flexlift.scenario_file import decode, dump_yaml, load_yaml, read_bytes
-from flexlift.scenario_types import (
+from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
+from flexlift.scenario.messages import first_error, format_error
+from flexlift.scenario.types import (
     MAX_BAG_LIFT_T,
     MAX_ELEMENTS,
     MAX_ITEMS,
@@ -463,7 +463,7 @@ EMPTY = ("the file is empty (or only comments); an empty scenario is not read as
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     """Load a built-in scenario by name (default ``tanker``) or a YAML file by path.
 
-    The file is read defensively (:mod:`flexlift.scenario_file`): a regular UTF-8 file of at
+    The file is read defensively (:mod:`flexlift.scenario.file`): a regular UTF-8 file of at
     most 1 MB, one YAML document, no duplicate keys, bounded nesting and aliases; an empty
     file is an error, not the tanker."""
     if name_or_path is None:

@@ -6,7 +6,7 @@ K and any factorisation of K + sigma M carry round-off of ~eps * 1e20 ~ 1e4 — 
 eigenvalues wanted. The rigid modes come out polluted and the low flexible ones lose digits.
 
 The default method here ("flexibility") never forms or factorises K. It uses the factor form
-of the Hermite element, ``K = S^-1 D^T W D S^-1`` (:func:`flexlift.beam.deformation_matrix`):
+of the Hermite element, ``K = S^-1 D^T W D S^-1`` (:func:`flexlift.structure.beam.deformation_matrix`):
 
 * S scales the DOFs (rotations times the element length, so every DOF is a length);
 * D (entries 0, +-1) maps the DOFs to two deformations per element; its null space is
@@ -43,7 +43,7 @@ accurate low modes are not mixed with the high ones), and then Phi^T K Phi must 
 diag(omega^2) to GRAM_TOL, entry by entry relative to the larger omega^2 of the pair. The
 stiffness Gram matrix is z^T z with z = L^T D y (the factor form), not y^T K y with the
 assembled K. The modes from the first one that fails on are not resolved (see
-:func:`flexlift.modes.compute_modes`).
+:func:`flexlift.structure.modes.compute_modes`).
 
 "shift-invert" (kept for models whose K is not the bare hull's, and for comparison) uses the
 same scaling, factorises K + sigma M (sigma > 0) with a sparse LU and works in the
@@ -59,8 +59,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from flexlift.beam import Beam, assemble, dof_scale, element_mass, element_stiffness
 from flexlift.errors import SimulationError
+from flexlift.structure.beam import Beam, assemble, dof_scale, element_mass, element_stiffness
 
 log = logging.getLogger(__name__)
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from flexlift.hull import Hull
+from flexlift.structure.hull import Hull
 
 
 def element_stiffness(EI: float, l: float) -> np.ndarray:

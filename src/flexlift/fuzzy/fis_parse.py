@@ -1,4 +1,4 @@
-"""Reading MATLAB ``.fis`` text as MATLAB's ``readfis`` does (see :mod:`flexlift.fis`).
+"""Reading MATLAB ``.fis`` text as MATLAB's ``readfis`` does (see :mod:`flexlift.fuzzy.fis`).
 
 Accepted, as MATLAB's reader accepts them: comment lines starting with ``%`` or ``#`` and
 blank lines anywhere, a trailing ``%``/``#`` comment after a value, indentation and spaces
@@ -23,7 +23,7 @@ import operator
 import re
 
 from flexlift.errors import InputError
-from flexlift.fuzzy import (
+from flexlift.fuzzy.system import (
     AGGREGATIONS,
     ALL_KINDS,
     AND_METHODS,

@@ -13,7 +13,7 @@ Sign conventions (used by every function here):
   errors (the imbalance of the load case), reported, never hidden.
 
 Consistent nodal loads (virtual work with the Hermite shape functions of
-:mod:`flexlift.beam`) are vectors of length 2 (n + 1) in the DOF order
+:mod:`flexlift.structure.beam`) are vectors of length 2 (n + 1) in the DOF order
 ``[w_0, theta_0, w_1, theta_1, ...]``: forces [N] on the w entries, moments [N m] (bow-up
 positive) on the theta entries. They reproduce the resultant (sum of the force entries) and
 its moment about the aft end (``sum f_w x_node + sum f_theta``) exactly.
@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexlift.beam import shape_functions
 from flexlift.errors import InputError
-from flexlift.hull import Hull
+from flexlift.structure.beam import shape_functions
+from flexlift.structure.hull import Hull
 
 # 3-point Gauss-Legendre on [0, 1]: exact to degree 5 (a cubic shape function times a
 # linearly varying load is degree 4)
@@ -233,7 +233,7 @@ def lift_load_case(
 ) -> LoadCase:
     """The lift plan's load case: downward weight plus breakout, bags pulling up.
 
-    plan : :class:`~flexlift.liftplan.LiftPlan`
+    plan : :class:`~flexlift.loads.liftplan.LiftPlan`
     hull : the beam the plan was laid out on
     bag_lifts : lift of each bag by name [N]; default every bag at its full rated lift
     weight_factor : total downward load / wet weight [-]; default the plan's breakout

@@ -11,7 +11,7 @@ import numpy as np
 from matplotlib.patches import Ellipse, Polygon, Rectangle
 
 from flexlift import constants as C
-from flexlift.plots._style import new_figure
+from flexlift.output.plots._style import new_figure
 
 _EXT = "#c0392b"
 _INT = "#2e86c1"
@@ -26,8 +26,8 @@ def _t(force: float, g: float) -> float:
 def load_diagram(hull, plan, case=None):
     """The hull in profile with its lift bags and loads.
 
-    hull : :class:`~flexlift.hull.Hull`; plan : :class:`~flexlift.liftplan.LiftPlan`
-    case : the :class:`~flexlift.loads.LoadCase` (for the weight line load); optional
+    hull : :class:`~flexlift.structure.hull.Hull`; plan : :class:`~flexlift.loads.liftplan.LiftPlan`
+    case : the :class:`~flexlift.loads.strength.LoadCase` (for the weight line load); optional
     """
     L, D = hull.length, hull.depth
     g = plan.gravity
@@ -102,7 +102,7 @@ def load_diagram(hull, plan, case=None):
 def shear_moment_figure(st, hull, plan=None):
     """Shear force [MN] and bending moment [MN m] along the hull, extremes marked.
 
-    st : :class:`~flexlift.loads.Strength`; hull : the beam; plan : optional, to mark bags
+    st : :class:`~flexlift.loads.strength.Strength`; hull : the beam; plan : optional, to mark bags
     """
     fig, (ax1, ax2) = new_figure(2, 1, sharex=True, figsize=(8.5, 5.6))
     x = st.x

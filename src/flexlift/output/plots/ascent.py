@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexlift.plots._style import new_figure
+from flexlift.output.plots._style import new_figure
 
 _PANELS = (
     ("height", 1.0, "height [m]"),

@@ -1,7 +1,7 @@
 """Figures of the modal analysis: mode shapes, frequency against mode number, convergence.
 
 Each function takes computed data and returns a matplotlib figure (nothing is shown);
-save it with :func:`flexlift.plots._style.save`.
+save it with :func:`flexlift.output.plots._style.save`.
 """
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import NullFormatter, ScalarFormatter
 
-from flexlift.convergence import Convergence, is_uniform
-from flexlift.modes import Modes, analytic_free_free_hz, mode_nodes, zero_crossings
-from flexlift.plots._style import new_figure
+from flexlift.output.plots._style import new_figure
+from flexlift.structure.convergence import Convergence, is_uniform
+from flexlift.structure.modes import Modes, analytic_free_free_hz, mode_nodes, zero_crossings
 
 _SAMPLES_PER_ELEMENT = 40
 _MAX_SAMPLES = 4001

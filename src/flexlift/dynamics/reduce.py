@@ -3,7 +3,7 @@
 Keep r modes, eliminate the rest:
 
 - ordering "unsorted": keep the r lowest-frequency modes; "sorted": keep the modes of largest
-  gain (:func:`flexlift.statespace.mode_gains`). The rigid modes are always kept (a model
+  gain (:func:`flexlift.dynamics.statespace.mode_gains`). The rigid modes are always kept (a model
   without them cannot follow the ascent), so "sorted" ranks the flexible modes for the
   remaining r − n_rigid places; at r = n_rigid both orderings give the same model.
 - method "del": delete the eliminated states (plain truncation);
@@ -27,15 +27,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexlift.errors import InputError
-from flexlift.modes import Modes
-from flexlift.statespace import (
+from flexlift.dynamics.statespace import (
     ModalStateSpace,
     default_omega_lo,
     frequency_response,
     modal_state_space,
     mode_gains,
 )
+from flexlift.errors import InputError
+from flexlift.structure.modes import Modes
 
 #: the four reductions, in the order of the paper's table
 METHODS = ("unsorted_del", "unsorted_mdc", "sorted_del", "sorted_mdc")

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from flexlift.beam import Beam, assemble, shape_functions
 from flexlift.errors import InputError, SimulationError
-from flexlift.hull import Hull
-from flexlift.modes_sparse import DENSE_MAX_DOF, GRAM_TOL, sparse_flexible
+from flexlift.structure.beam import Beam, assemble, shape_functions
+from flexlift.structure.eigen import DENSE_MAX_DOF, GRAM_TOL, sparse_flexible
+from flexlift.structure.hull import Hull
 
 log = logging.getLogger(__name__)
 
@@ -149,7 +149,7 @@ def compute_modes(
     hull : the structure (or an assembled :class:`Beam`)
     n_modes : total number of modes wanted, rigid included (default: all, 2 per node, up to
         400 elements; 22 = 2 rigid + 20 flexible above that) [-]
-    solver : "sparse" (flexibility Lanczos of :mod:`flexlift.modes_sparse`: O(N) memory,
+    solver : "sparse" (flexibility Lanczos of :mod:`flexlift.structure.eigen`: O(N) memory,
         accurate to round-off at any mesh size for the low modes; the high modes of a model
         up to DENSE_MAX_DOF = 4002 DOFs from a dense stiffness solve), "dense" (generalised
         ``eigh`` of K and M projected on the complement of the rigid modes: O(N^2) memory,

@@ -9,7 +9,7 @@ connective 1 = AND, 2 = OR.
 Import (:func:`read_fis`, :func:`from_fis_text`) reads what MATLAB's ``readfis`` reads:
 Mamdani and Sugeno systems, any number of inputs and outputs, every membership function type
 of the Fuzzy Logic Toolbox, comments, both the old and the current header; the details are
-in :mod:`flexlift.fis_parse`. What flexlift cannot evaluate (a custom operator or membership
+in :mod:`flexlift.fuzzy.fis_parse`. What flexlift cannot evaluate (a custom operator or membership
 function, a hedge, another system type) and every malformed line raise InputError with one
 line naming the file, the line and what is allowed. The output grid size is not part of the
 format (MATLAB sets it at evaluation): pass ``resolution`` (default 101, as MATLAB); nor is
@@ -27,8 +27,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from flexlift.errors import InputError
-from flexlift.fis_parse import METHODS, parse_fis
-from flexlift.fuzzy import FIS, MF
+from flexlift.fuzzy.fis_parse import METHODS, parse_fis
+from flexlift.fuzzy.system import FIS, MF
 from flexlift.output.files import write_text
 
 ROLES = ("supervisor", "fill")

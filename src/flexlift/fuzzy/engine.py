@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexlift.errors import InputError
-from flexlift.fuzzy_mf import MF_KINDS, _k_gauss_fast
+from flexlift.fuzzy.mf import MF_KINDS, _k_gauss_fast
 
 log = logging.getLogger("flexlift.fuzzy")
 

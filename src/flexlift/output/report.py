@@ -1,6 +1,6 @@
 """The report page: one self-contained HTML file (figures embedded), readable when printed.
 
-:func:`render_report` takes the scenario and the stages' :class:`~flexlift.outputs.StageOutput`
+:func:`render_report` takes the scenario and the stages' :class:`~flexlift.output.stage.StageOutput`
 and returns the HTML text; writing it is the caller's business.
 """
 
@@ -12,7 +12,7 @@ import math
 from datetime import UTC, datetime
 
 from flexlift import __version__
-from flexlift.outputs import StageOutput
+from flexlift.output.stage import StageOutput
 
 STAGE_TITLES = {
     "modes": "1. Modal analysis of the hull",

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexlift.errors import InputError
-from flexlift.fuzzy import FIS, MF, Rule, Variable
+from flexlift.fuzzy.system import FIS, MF, Rule, Variable
 
 LABELS = ("NB", "NM", "NS", "ZE", "PS", "PM", "PB")
 

@@ -17,8 +17,8 @@ import numpy as np
 
 from flexlift import constants as C
 from flexlift.errors import InputError
-from flexlift.hull import Hull
-from flexlift.modes import Modes, mode_nodes
+from flexlift.structure.hull import Hull
+from flexlift.structure.modes import Modes, mode_nodes
 
 log = logging.getLogger(__name__)
 

@@ -4,7 +4,7 @@ A :class:`FIS` is immutable data (input/output :class:`Variable` s with their me
 functions, :class:`Rule` s as index tuples, the operator names); evaluating it is one pure call,
 ``u = fis(x)``, for one point or an array of points, vectorised with NumPy over points and
 rules (no Python loop over points, no set-input/compute/read-output state). Membership
-functions: :mod:`flexlift.fuzzy_mf`; the compiled arrays: :mod:`flexlift.fuzzy_engine`.
+functions: :mod:`flexlift.fuzzy.mf`; the compiled arrays: :mod:`flexlift.fuzzy.engine`.
 
 Semantics (MATLAB's Fuzzy Logic Toolbox, type-1 ``mamfis``/``sugfis``, as ``evalfis`` computes):
 
@@ -47,14 +47,14 @@ from functools import cached_property
 import numpy as np
 
 from flexlift.errors import InputError
-from flexlift.fuzzy_engine import (
+from flexlift.fuzzy.engine import (
     aggregate,
     compile_fis,
     evaluate,
     fire,
     single_point,
 )
-from flexlift.fuzzy_mf import (  # noqa: F401  (re-exported: the public names of this module)
+from flexlift.fuzzy.mf import (  # noqa: F401  (re-exported: the public names of this module)
     ALL_KINDS,
     MF_KINDS,
     OUTPUT_FUNCTIONS,
@@ -73,7 +73,7 @@ from flexlift.fuzzy_mf import (  # noqa: F401  (re-exported: the public names of
     trimf,
     zmf,
 )
-from flexlift.fuzzy_surface import ERROR_SAFETY, Surface, make_surface  # noqa: F401
+from flexlift.fuzzy.surface import ERROR_SAFETY, Surface, make_surface  # noqa: F401
 
 KINDS = ("mamdani", "sugeno")
 AND_METHODS = ("min", "prod")
@@ -88,7 +88,7 @@ OUT_OF_RANGE = ("clip", "extrapolate")
 # --------------------------------------------------------------------------- data
 @dataclass(frozen=True)
 class MF:
-    """A named membership function: ``kind`` (see :mod:`flexlift.fuzzy_mf`) and MATLAB-order
+    """A named membership function: ``kind`` (see :mod:`flexlift.fuzzy.mf`) and MATLAB-order
     ``params``. Calling it evaluates the set at ``x`` (its variable's unit); a Sugeno output
     function (``constant``, ``linear``) is evaluated at input vectors ``x`` of shape
     (..., n_inputs) instead."""

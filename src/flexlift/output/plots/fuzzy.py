@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexlift.fuzzy import FIS
-from flexlift.plots._style import new_figure
+from flexlift.fuzzy.system import FIS
+from flexlift.output.plots._style import new_figure
 
 
 def plot_memberships(fis: FIS, samples: int = 401):

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexlift.errors import InputError
-from flexlift.hull import Hull
-from flexlift.modes import analytic_free_free_hz, compute_modes
+from flexlift.structure.hull import Hull
+from flexlift.structure.modes import analytic_free_free_hz, compute_modes
 
 #: element counts studied for a uniform beam (the paper's 11 among them)
 DEFAULT_COUNTS = (3, 4, 6, 8, 11, 16, 24, 32, 48, 64)
