@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from flexlift.cli import main
-from flexlift.cli.fuzzy import run_stage
 from flexlift.fuzzy.fis import write_fis
 from flexlift.fuzzy.rulebase import supervisor_fis
+from flexlift.stages.fuzzy import run_stage
 
 
 def _json(capsys, argv):

@@ -10,7 +10,7 @@ import yaml
 
 from flexlift import constants as C
 from flexlift.cli import main
-from flexlift.cli.loads import run_stage
+from flexlift.stages.loads import run_stage
 
 KEYS = {
     "wet_weight_t",

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from flexlift.cli import main
-from flexlift.cli.modes import run_stage
+from flexlift.stages.modes import run_stage
 from flexlift.structure.hull import hull_from_scenario
 from flexlift.structure.modes import analytic_free_free_hz, compute_modes
 

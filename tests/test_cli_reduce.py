@@ -5,8 +5,8 @@ import json
 import pytest
 
 from flexlift.cli import main
-from flexlift.cli.reduce import run_stage
 from flexlift.dynamics.reduce import METHODS
+from flexlift.stages.reduce import run_stage
 
 
 def _json(capsys, argv):

@@ -35,8 +35,8 @@ def test_simulate_writes_files(tmp_path, capsys):
 
 
 def test_run_stage_and_compare(tmp_path):
-    from flexlift.cli.simulate import compare_stage, run_stage
     from flexlift.scenario import load_scenario
+    from flexlift.stages.simulate import compare_stage, run_stage
 
     sc = load_scenario("tanker")
     outs = [run_stage(sc, tmp_path, control=m, duration=100.0) for m in ("decentralized", "coordinated")]

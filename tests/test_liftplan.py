@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 
 import pytest
-from flexlift.loads.liftplan import bag_count, plan_lift
 
 from flexlift import constants as C
 from flexlift.errors import InputError
+from flexlift.loads.liftplan import bag_count, plan_lift
 from flexlift.scenario import load_scenario
 from flexlift.structure.hull import hull_from_scenario
 from flexlift.structure.modes import compute_modes, zero_crossings

@@ -83,7 +83,7 @@ def test_interrupted_run_leaves_previous_output_intact(tmp_path, monkeypatch):
     out = tmp_path / "tanker"
     assert main(["run", "--out", str(out), "--quiet", "--stages", "modes"]) == 0
     previous = (out / "report.html").read_text()
-    import flexlift.cli.loads as loads_cli
+    import flexlift.stages.loads as loads_cli
 
     def boom(*a, **k):
         raise KeyboardInterrupt

@@ -7,22 +7,14 @@ swapped in only when complete: an interrupted or failed run leaves the previous 
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 import time
-import typing
 from pathlib import Path
 
-from flexlift import __version__
 from flexlift.cli._common import add_scenario_arg, emit_json, scenario_from
 from flexlift.output import output_folder, write_json, write_text
-from flexlift.output.report import STAGE_TITLES, render_report
-from flexlift.output.stage import StageOutput
-from flexlift.scenario import ControlMode
-
-STAGES = ("modes", "loads", "reduce", "fuzzy", "simulate")
-CONTROL_MODES = typing.get_args(ControlMode)
-DEFAULT_CONTROLS = ("decentralized", "coordinated")
+from flexlift.output.report import render_report
+from flexlift.stages.run import CONTROL_MODES, DEFAULT_CONTROLS, STAGES, run_all, summary_of
 
 
 def _csv_list(kind: str, allowed: tuple[str, ...]):
@@ -104,61 +96,6 @@ class Progress:
         self._last = pct
 
 
-def run_all(
-    scenario,
-    out: Path,
-    stages: tuple[str, ...] = STAGES,
-    controls: tuple[str, ...] = DEFAULT_CONTROLS,
-    progress: Progress | None = None,
-) -> list[StageOutput]:
-    """Run ``stages`` into the folder ``out`` (already created); return their outputs."""
-    progress = progress or Progress(quiet=True)
-    outputs: list[StageOutput] = []
-    n = len(stages)
-    for k, name in enumerate(stages, start=1):
-        module = importlib.import_module(f"flexlift.cli.{name}")
-        title = STAGE_TITLES.get(name, name).split(". ", 1)[-1]
-        if name == "simulate":
-            progress.stage(k, n, f"{title}: {', '.join(controls)}")
-            for mode in controls:
-                outputs.append(
-                    module.run_stage(
-                        scenario,
-                        out,
-                        control=mode,
-                        progress=lambda f, m=mode: progress.bar(f, m),
-                        primary=mode == controls[0],  # its dataset is results.nc
-                    )
-                )
-            if len(controls) > 1:
-                outputs.append(module.compare_stage(outputs[-len(controls):], out))
-        else:
-            progress.stage(k, n, title)
-            outputs.append(module.run_stage(scenario, out))
-    return outputs
-
-
-def summary_of(scenario, outputs: list[StageOutput], elapsed_s: float) -> dict:
-    """summary.json: the headline numbers of every stage under the stage's name."""
-    stages: dict = {}
-    for o in outputs:
-        if o.name.startswith("simulate:"):
-            stages.setdefault("simulate", {})[o.name.split(":", 1)[1]] = o.summary
-        elif o.name != "compare":
-            stages[o.name] = o.summary
-    criteria = {f"{o.name}.{k}": bool(v) for o in outputs for k, v in o.criteria.items()}
-    return {
-        "flexlift_version": __version__,
-        "scenario": scenario.name,
-        "scenario_checksum": scenario.checksum(),
-        "elapsed_s": round(elapsed_s, 2),
-        "all_criteria_passed": all(criteria.values()) if criteria else None,
-        "criteria": criteria,
-        "warnings": [w for o in outputs for w in o.warnings],
-        "stages": stages,
-    }
-
-
 def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
     out = args.out if args.out is not None else Path("flexlift-out") / scenario.name
@@ -180,3 +117,5 @@ def _main(args: argparse.Namespace) -> int:
             f"{len(summary['warnings'])} warning(s)\nreport: {out / 'report.html'}\n"
         )
     return 1 if args.strict and summary["all_criteria_passed"] is False else 0
+
+

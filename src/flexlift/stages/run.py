@@ -1,0 +1,84 @@
+"""All stages on one scenario, for ``flexlift run``: their outputs and the run's summary.
+"""
+
+from __future__ import annotations
+
+import importlib
+import typing
+from pathlib import Path
+
+from flexlift import __version__
+from flexlift.output.report import STAGE_TITLES
+from flexlift.output.stage import StageOutput
+from flexlift.scenario import ControlMode
+
+STAGES = ("modes", "loads", "reduce", "fuzzy", "simulate")
+CONTROL_MODES = typing.get_args(ControlMode)
+DEFAULT_CONTROLS = ("decentralized", "coordinated")
+
+
+class _Silent:
+    """A progress display that shows nothing."""
+
+    def stage(self, k: int, n: int, text: str) -> None:
+        pass
+
+    def bar(self, fraction: float, label: str = "") -> None:
+        pass
+
+
+def run_all(
+    scenario,
+    out: Path,
+    stages: tuple[str, ...] = STAGES,
+    controls: tuple[str, ...] = DEFAULT_CONTROLS,
+    progress=None,
+) -> list[StageOutput]:
+    """Run ``stages`` into the folder ``out`` (already created); return their outputs.
+    ``progress``: an object with ``stage(k, n, text)`` and ``bar(fraction, label)`` (the CLI's
+    progress display), or None."""
+    progress = progress or _Silent()
+    outputs: list[StageOutput] = []
+    n = len(stages)
+    for k, name in enumerate(stages, start=1):
+        module = importlib.import_module(f"flexlift.stages.{name}")
+        title = STAGE_TITLES.get(name, name).split(". ", 1)[-1]
+        if name == "simulate":
+            progress.stage(k, n, f"{title}: {', '.join(controls)}")
+            for mode in controls:
+                outputs.append(
+                    module.run_stage(
+                        scenario,
+                        out,
+                        control=mode,
+                        progress=lambda f, m=mode: progress.bar(f, m),
+                        primary=mode == controls[0],  # its dataset is results.nc
+                    )
+                )
+            if len(controls) > 1:
+                outputs.append(module.compare_stage(outputs[-len(controls):], out))
+        else:
+            progress.stage(k, n, title)
+            outputs.append(module.run_stage(scenario, out))
+    return outputs
+
+
+def summary_of(scenario, outputs: list[StageOutput], elapsed_s: float) -> dict:
+    """summary.json: the headline numbers of every stage under the stage's name."""
+    stages: dict = {}
+    for o in outputs:
+        if o.name.startswith("simulate:"):
+            stages.setdefault("simulate", {})[o.name.split(":", 1)[1]] = o.summary
+        elif o.name != "compare":
+            stages[o.name] = o.summary
+    criteria = {f"{o.name}.{k}": bool(v) for o in outputs for k, v in o.criteria.items()}
+    return {
+        "flexlift_version": __version__,
+        "scenario": scenario.name,
+        "scenario_checksum": scenario.checksum(),
+        "elapsed_s": round(elapsed_s, 2),
+        "all_criteria_passed": all(criteria.values()) if criteria else None,
+        "criteria": criteria,
+        "warnings": [w for o in outputs for w in o.warnings],
+        "stages": stages,
+    }
