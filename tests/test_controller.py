@@ -112,13 +112,21 @@ def test_the_neutral_volume_adapts_to_a_steady_error(tanker, plant):
     sc = tanker.with_changes(**{"control.height_integral_gain_m2_s": 0.05})
     C, S = _controller(sc, plant)
     _step(C, S, 0.0, 0.0, 0.0, C.V_neutral, True)
-    for k in range(1, 101):  # 10 s one metre below the ground, the reference rising from it
-        _step(C, S, 0.1 * k, -1.0, 0.0, C.V_neutral, True)
-    errors = [1.0 + trapezoid(0.1 * k, 300.0, 0.2, 0.002)[0] for k in range(1, 101)]
-    np.testing.assert_allclose(S.adapt, 0.05 * 0.1 * sum(errors), rtol=1e-9)
-    for k in range(101, 100101, 100):  # and it never exceeds the supervisor's authority
-        _step(C, S, 0.1 * k, -1.0, 0.0, C.V_neutral, True)
+
+    def below(k, d):  # d metres below the reference at sample k
+        return trapezoid(0.1 * k, 300.0, 0.2, 0.002)[0] - d
+
+    for k in range(1, 101):  # 10 s one metre below the reference: 0.05 m3 per m and s
+        _step(C, S, 0.1 * k, below(k, 1.0), 0.0, C.V_neutral, True)
+    np.testing.assert_allclose(S.adapt, 0.05 * 1.0 * 10.0, rtol=1e-9)
+    for k in range(101, 16101):  # it never exceeds the supervisor's authority
+        _step(C, S, 0.1 * k, below(k, 1.0), 0.0, C.V_neutral, True)
     np.testing.assert_allclose(S.adapt, C.dV_max)
+    C, S = _controller(sc, plant)  # far from the reference (a transient): no adaptation
+    _step(C, S, 0.0, 0.0, 0.0, C.V_neutral, True)
+    for k in range(1, 101):
+        _step(C, S, 0.1 * k, below(k, 3.0), 0.0, C.V_neutral, True)
+    np.testing.assert_array_equal(S.adapt, 0.0)
 
 
 def test_the_measurement_filter_lags_a_step(tanker, plant):

@@ -184,3 +184,70 @@ def test_numerics_failure_keeps_partial_results(quick, monkeypatch):
     part = err.value.partial
     assert part is not None and 40.0 < part.dataset.time.values[-1] < 200.0
     assert "numerics failed" in part.error
+
+
+# ----------------------------------------------------------------------------- headline pins
+#: the README's tanker table (flexlift run on the built-in tanker); a change to the physics,
+#: the controllers or the integrator that moves any of these must say so and update them
+HEADLINE = {
+    "decentralized": {"separation_time_s": 1874.9, "breakout_time_s": 2030.4,
+                      "max_ascent_velocity_ms": 0.2122, "max_pitch_deg": 1.3011,
+                      "max_bending_moment_MNm": 46.022, "gas_used_free_air_m3": 7562.6,
+                      "arrival_spread_s": 0.1},
+    "coordinated": {"separation_time_s": 1877.5, "breakout_time_s": 2033.1,
+                    "max_ascent_velocity_ms": 0.2082, "max_pitch_deg": 0.2136,
+                    "max_bending_moment_MNm": 45.686, "gas_used_free_air_m3": 5804.6,
+                    "arrival_spread_s": 0.1},
+}
+
+
+@pytest.mark.parametrize("mode", ["decentralized", "coordinated"])
+def test_headline_numbers_are_pinned(tanker_runs, mode):
+    h = tanker_runs[mode].headline
+    for key, value in HEADLINE[mode].items():
+        tol = 0.15 if key == "arrival_spread_s" else 2e-3 * abs(value)
+        assert h[key] == pytest.approx(value, abs=tol), key
+    last = np.nanmax(tanker_runs[mode].dataset.arrival_time.values)
+    assert last == pytest.approx({"decentralized": 3442.7, "coordinated": 3445.4}[mode], abs=1.0)
+
+
+# ----------------------------------------------------------------------------- any hull, any mesh
+def _metre_layout(tanker, tanker_plan):
+    bags = []
+    for b in tanker_plan.bags:
+        d = {"name": b.name, "kind": b.kind}
+        if b.kind == "external":
+            d["x_m"] = float(b.x)
+        else:
+            d["span_m"] = [float(s) for s in b.span]
+        bags.append(d)
+    return tanker.with_changes(**{"lift.bags": bags})
+
+
+@pytest.mark.parametrize("mode", ["decentralized", "coordinated"])
+def test_mesh_independence_with_bags_placed_in_metres(tanker, tanker_plan, mode):
+    """The tanker at 11, 50, 200 and 1,000 elements passes every criterion, with arrival time
+    and peak bending moment within 2 % and 5 % of the 11-element run."""
+    base = _metre_layout(tanker, tanker_plan)
+    runs = {n: simulate(base.with_changes(**{"hull.elements": n}), control=mode)
+            for n in (11, 50, 200, 1000)}
+    ref = runs[11]
+    t_ref = np.nanmax(ref.dataset.arrival_time.values)
+    for n, r in runs.items():
+        assert all(r.criteria.values()), (n, r.criteria)
+        assert np.nanmax(r.dataset.arrival_time.values) == pytest.approx(t_ref, rel=0.02), n
+        assert r.headline["max_bending_moment_MNm"] == pytest.approx(
+            ref.headline["max_bending_moment_MNm"], rel=0.05), n
+
+
+def test_the_adapted_neutral_volume_removes_the_steady_error(tanker):
+    """At 200 elements the default layout snaps the bags to other nodes and the lift is off
+    the centre of gravity: a bag settled 1.16 m short and the run never held the target.
+    With the neutral volumes adapting (the default), every bag arrives."""
+    fine = tanker.with_changes(**{"hull.elements": 200})
+    off = simulate(fine.with_changes(**{"control.height_integral_gain_m2_s": 0.0}))
+    assert not off.criteria["reached_target"]
+    assert np.abs(off.dataset.height.values[-1] - 300.0).max() > 1.0
+    on = simulate(fine)
+    assert all(on.criteria.values())
+    assert np.abs(on.dataset.height.values[-1] - 300.0).max() < 0.05

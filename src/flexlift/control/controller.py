@@ -12,9 +12,9 @@ per bag:
 3. **Supervisor**: normalised error e = (z_ref - z) / e_scale and rate r = (ż_ref - ż) / r_scale,
    saturated to [-1, 1], to u in [-1, 1] (the fuzzy map as a lookup table, or given from
    outside); desired volume V_d = V_neutral + I + u ΔV_max. I, the adapted neutral volume,
-   integrates the height error (gain ``k_height``, at most ΔV_max either way) so that a bag
-   whose share of the lift differs from its neutral volume still arrives: no steady error on an
-   unbalanced hull. Before separation V_d holds the breakout pull.
+   integrates the height error (gain ``k_height``, at most ΔV_max either way, and only while
+   |e| < :data:`ADAPT_BAND`, so transients do not wind it up) so that a bag whose share of the
+   lift differs from its neutral volume still arrives: no steady error on an unbalanced hull. Before separation V_d holds the breakout pull.
 4. **Coordination** (coordinated mode): V_d -= (k_θ θ + k_θ' θ') ξ_i, θ the slope of the
    least-squares line through the live bags' heights and ξ_i the bag's normalised lever.
 5. **Fill**, SIFSMC on ε = V_d - V: s = ε' + λ ε (ε' a filtered difference, time constant
@@ -43,6 +43,9 @@ from flexlift.fuzzy.tables import bilinear, linear
 
 #: time constant of the filter on the volume-deficit derivative of the SIFSMC [s]
 DERIV_TAU = 1.0
+#: the neutral volume adapts only while the normalised height error is below this: it removes
+#: a small steady error and does not wind up during the transients of breakout
+ADAPT_BAND = 0.25
 #: control modes inside the compiled loop
 DECENTRALIZED, COORDINATED, OPEN_LOOP = 0, 1, 2
 MODE_CODES = {"decentralized": DECENTRALIZED, "coordinated": COORDINATED, "open-loop": OPEN_LOOP,
@@ -142,7 +145,7 @@ def observe(t, z, zd, separated, C, S):
         S.z_ref[i] = S.z0[i] + pos
         S.e_in[i] = min(max((S.z_ref[i] - S.z_f[i]) / C.e_scale, -1.0), 1.0)
         S.r_in[i] = min(max((vel - S.zd_f[i]) / C.r_scale, -1.0), 1.0)
-        if S.active[i] and C.k_height > 0.0:
+        if S.active[i] and C.k_height > 0.0 and abs(S.e_in[i]) < ADAPT_BAND:
             lim = C.dV_max[i]
             S.adapt[i] = min(max(S.adapt[i] + C.period * C.k_height * (S.z_ref[i] - S.z_f[i]),
                                  -lim), lim)

@@ -280,7 +280,7 @@ class Control(_Section):
     ascent_acceleration_m_s2: real(1e-5, 1) = 0.002
     breakout_pull_t: real(0, MAX_MASS_T) = 150.0  # extra buoyancy held until the hull lifts off
     volume_deadband_m3: real(0, 10_000) = 0.2  # |V_d - V| below this: neither fill nor purge
-    height_integral_gain_m2_s: real(0, 100) = 0.0  # neutral volume adapted per m of error [m^3/(m s)]
+    height_integral_gain_m2_s: real(0, 100) = 0.05  # neutral volume adapted per m of error [m^3/(m s)]
     measurement_filter_s: real(0, 1_000) = 0.0  # low-pass time constant of measured height, speed
     supervisor: Supervisor = Supervisor()
     fill: FillControl = FillControl()
