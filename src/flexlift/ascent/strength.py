@@ -17,7 +17,9 @@ from flexlift.loads.strength import shear_moment
 from flexlift.physics import gas, hydro, seabed
 
 #: most grid points along the structure (fine meshes are sampled more coarsely)
-MAX_POINTS = 4001
+MAX_POINTS = 2001
+#: snapshots evaluated at once (bounds the temporary arrays of long runs on fine grids)
+CHUNK = 64
 
 
 def strength_grid(plant) -> tuple[np.ndarray, np.ndarray]:
@@ -84,5 +86,10 @@ def strength(plant, snaps: dict):
     """(x [m], V [N] (nt, nx), M [N m] (nt, nx)) along the structure at the snapshots
     (``snaps``: the snapshot arrays stacked over time, names as in the loop's record)."""
     x, xe = strength_grid(plant)
-    V, M = shear_moment(x, line_loads(plant, xe, snaps), point_loads(plant, snaps))
+    nt = snaps["t"].size
+    V, M = np.empty((nt, x.size)), np.empty((nt, x.size))
+    for a in range(0, nt, CHUNK):
+        part = {k: v[a:a + CHUNK] for k, v in snaps.items()}
+        V[a:a + CHUNK], M[a:a + CHUNK] = shear_moment(x, line_loads(plant, xe, part),
+                                                      point_loads(plant, part))
     return x, V, M
