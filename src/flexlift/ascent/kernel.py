@@ -38,7 +38,7 @@ from flexlift.ascent.mechanics import (
     strip_loads,
     trapezoidal_step,
 )
-from flexlift.ascent.recording import group_uplift, log_event, store_row, store_snapshot
+from flexlift.ascent.recording import group_uplift, log_event, store_row, store_snapshot  # noqa: F401
 from flexlift.ascent.state import (
     CONTACT_SUBSTEPS,
     EV_ARRIVAL,

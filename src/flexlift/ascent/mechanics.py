@@ -134,4 +134,5 @@ def trapezoidal_step(A, q, v, b_mid, h, implicit, stiff, damp, work):
 @jit
 def accelerations(A, q, v, b, contact):
     """Modal accelerations [per modal coordinate] at a state: every load, contact included."""
-    return b + A.strip_force @ contact - A.omega2 * q - A.damping * v
+    a = b - A.omega2 * q - A.damping * v
+    return matvec_add(A.strip_force, contact, a)

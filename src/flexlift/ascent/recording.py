@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from flexlift._jit import jit
+from flexlift.ascent.linalg import dot, matvec, matvec_add
 from flexlift.ascent.mechanics import accelerations
 from flexlift.ascent.state import MAX_EVENTS
 from flexlift.physics.gas import purge_flow
@@ -36,9 +37,13 @@ def store_row(t, A, C, S, R, W, rec):
     if r >= rec.t.size:
         return
     line = R.line + R.contact
-    z = R.z + A.corr_strip @ line + A.corr_bag @ R.point + A.corr_weight
-    slope = A.bag_slope @ R.q + A.slope_strip @ line + A.slope_bag @ R.point + A.slope_weight
-    rate = A.bag_slope @ R.v
+    z = R.z + A.corr_weight  # plus the static correction of the eliminated modes
+    matvec_add(A.corr_strip, line, z)
+    matvec_add(A.corr_bag, R.point, z)
+    slope = matvec(A.bag_slope, R.q, np.empty(A.nb)) + A.slope_weight
+    matvec_add(A.slope_strip, line, slope)
+    matvec_add(A.slope_bag, R.point, slope)
+    rate = matvec(A.bag_slope, R.v, np.empty(A.nb))
     nb = A.nb
     out = rec.bag[r]
     out[:, :] = np.nan
@@ -57,8 +62,8 @@ def store_row(t, A, C, S, R, W, rec):
     contact = 0.0
     for s in range(A.ns):
         contact += R.contact[s] * A.strip_weight[s]
-    rec.hull[r, 0] = A.heave_row @ R.q
-    rec.hull[r, 1] = math.atan(A.pitch_row @ R.q)
+    rec.hull[r, 0] = dot(A.heave_row, R.q)
+    rec.hull[r, 1] = math.atan(dot(A.pitch_row, R.q))
     rec.hull[r, 2] = R.H.sum()
     rec.hull[r, 3] = uplift
     rec.hull[r, 4] = contact
