@@ -137,9 +137,9 @@ class Plant:
 
 
 #: above this many elements the strips no longer follow the elements: a fixed load grid
-FINE_MESH_ELEMENTS = 100
+FINE_MESH_ELEMENTS = 50
 #: segments of the fixed load grid of fine meshes (two Gauss points each)
-LOAD_SEGMENTS = 200
+LOAD_SEGMENTS = 100
 
 
 def strip_points(hull: Hull) -> tuple[np.ndarray, np.ndarray]:
@@ -207,11 +207,15 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     env, hy, sim = scenario.environment, scenario.hydro, scenario.simulation
     hull = hull or hull_from_scenario(scenario)
     if plan is None:
-        plan = plan_lift(scenario, hull, compute_modes(hull))
+        plan = plan_lift(scenario, hull)
     rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
     mass_line = (hydro.added_mass_per_length(hull.breadth, rho, hy.added_mass_coefficient)
                  + hy.entrained_water_t * C.TONNE / hull.length)
-    modes = compute_modes(assemble(hull, extra_mass_per_length=mass_line))
+    beam = assemble(hull, extra_mass_per_length=mass_line)
+    # the retained modes plus 10 more for the static correction of the eliminated ones (their
+    # share falls as 1 / omega^2); all of them on the tanker's 11 elements
+    n_modes = min(beam.n_dof, max(MODES_FOR_CORRECTION, 2 + sim.retained_flexible_modes + 10))
+    modes = compute_modes(beam, n_modes=n_modes)
     nr = min(2 + sim.retained_flexible_modes, modes.n_modes)
     xs, ws = strip_points(hull)
     psi_s = modes.shape_at(xs)  # (ns, m)
@@ -269,6 +273,8 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
                  gravity=g, seawater_density=rho, steel_density=rho_s)
 
 
+#: modes computed for the static correction at least (2 rigid + 22 flexible)
+MODES_FOR_CORRECTION = 24
 #: the whole structure is clear of the seabed once every strip is this high [m]
 LIFTOFF_CLEARANCE = 0.05
 

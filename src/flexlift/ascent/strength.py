@@ -11,13 +11,15 @@ with their drag, and the point masses with their inertia. Shear and moment follo
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from flexlift.loads.strength import shear_moment
 from flexlift.physics import gas, hydro, seabed
 
 #: most grid points along the structure (fine meshes are sampled more coarsely)
-MAX_POINTS = 2001
+MAX_POINTS = 1001
 #: snapshots evaluated at once (bounds the temporary arrays of long runs on fine grids)
 CHUNK = 64
 
@@ -38,23 +40,45 @@ def strength_grid(plant) -> tuple[np.ndarray, np.ndarray]:
     return x, np.clip(x + side * 1e-9 * L, 0.0, L)
 
 
-def line_loads(plant, xe: np.ndarray, snaps: dict) -> np.ndarray:
+@dataclass(frozen=True)
+class _Grid:
+    """What the line loads need at the grid points, computed once per run."""
+
+    psi: np.ndarray  # (nx, nr) retained mode shapes
+    weight: np.ndarray  # (nx,) submerged weight per length [N/m]
+    mass: np.ndarray  # (nx,) structural plus added mass per length [kg/m]
+    drag: np.ndarray  # (nx,) 1/2 rho C_D B [kg/m^2]
+    k: np.ndarray  # (nx,) contact stiffness per length
+    c: np.ndarray  # (nx,) contact damping per length
+    hold: np.ndarray  # (nx,) holding shape [1/m]
+
+    @classmethod
+    def of(cls, plant, xe: np.ndarray) -> _Grid:
+        a, hull = plant.arrays, plant.hull
+        m = hull.mass_per_length[hull.element_of(xe)]
+        xs = plant.strip_x
+        return cls(plant.modes.shape_at(xe)[:, : a.nr],
+                   hydro.submerged_weight(m, plant.gravity, plant.seawater_density,
+                                          plant.steel_density),
+                   m + plant.mass_line, np.interp(xe, xs, a.strip_drag),
+                   np.interp(xe, xs, a.strip_k), np.interp(xe, xs, a.strip_c),
+                   seabed.holding_shape(xe, hull.length, *plant.hold_stern_bow))
+
+
+def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) -> np.ndarray:
     """Line loads [N/m] (nt, nx) at points ``xe`` [m] in every snapshot (up positive);
-    ``snaps`` holds the snapshot arrays stacked over time (see :func:`stack`)."""
-    a, hull = plant.arrays, plant.hull
-    psi = plant.modes.shape_at(xe)[:, : a.nr]
-    w, v, acc = snaps["q"] @ psi.T, snaps["v"] @ psi.T, snaps["a"] @ psi.T
-    m = hull.mass_per_length[hull.element_of(xe)]
-    rho, g = plant.seawater_density, plant.gravity
-    q = -hydro.submerged_weight(m, g, rho, plant.steel_density) - (m + plant.mass_line) * acc
-    xs = plant.strip_x
-    q += hydro.drag(v - snaps["current"][:, None], np.interp(xe, xs, a.strip_drag))
+    ``snaps`` holds the snapshot arrays stacked over time (see
+    :func:`flexlift.ascent.result.snapshots`)."""
+    G = grid or _Grid.of(plant, xe)
+    a = plant.arrays
+    w, v, acc = snaps["q"] @ G.psi.T, snaps["v"] @ G.psi.T, snaps["a"] @ G.psi.T
+    q = -G.weight - G.mass * acc
+    q += hydro.drag(v - snaps["current"][:, None], G.drag)
     held = ~snaps["sep"][:, :1]  # (nt, 1): one holding group
-    k, c = np.interp(xe, xs, a.strip_k), np.interp(xe, xs, a.strip_c)
-    q += seabed.contact_load(w, v, k, c, held)
-    shape = seabed.holding_shape(xe, hull.length, *plant.hold_stern_bow)
-    q -= np.where(held, 0.0, snaps["H"][:, :1] * shape)
-    q += np.array([np.interp(xe, xs, row) for row in snaps["noise"]])
+    q += seabed.contact_load(w, v, G.k, G.c, held)
+    q -= np.where(held, 0.0, snaps["H"][:, :1] * G.hold)
+    if np.any(snaps["noise"]):
+        q += np.array([np.interp(xe, plant.strip_x, row) for row in snaps["noise"]])
     for i, span in enumerate(plant.spans):
         if span is not None:
             lift = gas.buoyancy(snaps["V"][:, i], a.rho_g) * snaps["attached"][:, i]
@@ -88,8 +112,9 @@ def strength(plant, snaps: dict):
     x, xe = strength_grid(plant)
     nt = snaps["t"].size
     V, M = np.empty((nt, x.size)), np.empty((nt, x.size))
+    grid = _Grid.of(plant, xe)
     for a in range(0, nt, CHUNK):
         part = {k: v[a:a + CHUNK] for k, v in snaps.items()}
-        V[a:a + CHUNK], M[a:a + CHUNK] = shear_moment(x, line_loads(plant, xe, part),
+        V[a:a + CHUNK], M[a:a + CHUNK] = shear_moment(x, line_loads(plant, xe, part, grid),
                                                       point_loads(plant, part))
     return x, V, M

@@ -101,5 +101,5 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
         deadband=c.volume_deadband_m3, k_pitch=c.coordination.pitch_gain_m3_rad,
         k_pitch_rate=c.coordination.pitch_rate_gain_m3s_rad,
         k_height=c.height_integral_gain_m2_s, filter_time=c.measurement_filter_s,
-        table=np.ascontiguousarray(values), fill_v=fill_map.v)
+        table=np.ascontiguousarray(values), fill_v=fill_map.table.values)
     return arrays, new_state(bags.size)

@@ -22,6 +22,7 @@ import numpy as np
 
 from flexlift.errors import InputError
 from flexlift.fuzzy.system import FIS, MF, Rule, Variable
+from flexlift.fuzzy.tables import Table1D
 
 LABELS = ("NB", "NM", "NS", "ZE", "PS", "PM", "PB")
 
@@ -102,16 +103,14 @@ class FillMap:
 
     fis: FIS
     points: int = 4001
-    d: np.ndarray = field(init=False, repr=False)  # sample points over [0, 1]
-    v: np.ndarray = field(init=False, repr=False)  # fill fractions there, non-decreasing
+    table: Table1D = field(init=False, repr=False)  # fill fractions over d in [0, 1]
 
     def __post_init__(self):
         d = np.linspace(0.0, 1.0, self.points)
         raw = np.asarray(self.fis(d), dtype=float) / float(self.fis(1.0))
         v = np.clip(np.maximum.accumulate(raw), 0.0, 1.0)
         v[0], v[-1] = 0.0, 1.0  # d = 0 gives a centroid of +-1e-17: that is no fill
-        object.__setattr__(self, "d", d)
-        object.__setattr__(self, "v", v)
+        object.__setattr__(self, "table", Table1D(v, (0.0, 1.0)))
 
     def __call__(self, x):
         arr = np.asarray(x, dtype=float)
@@ -119,8 +118,7 @@ class FillMap:
             arr = arr[:, 0]
         if np.isnan(arr).any():
             raise InputError("fill map input", "nan", "the signed distance d must be a number")
-        out = np.interp(arr, self.d, self.v)  # 0 below d = 0, 1 above d = 1
-        return float(out) if out.ndim == 0 else out
+        return self.table(arr)  # 0 below d = 0, 1 above d = 1: the loop's own lookup
 
 
 def fill_fis(resolution: int = 101) -> FillMap:

@@ -42,9 +42,18 @@ def linear(values, lo, hi, x):
     if x != x:
         return np.nan
     n = values.size
-    s = min(max((x - lo) / (hi - lo) * (n - 1), 0.0), n - 1 - 1e-9)
+    s = max((x - lo) / (hi - lo) * (n - 1), 0.0)
+    if s >= n - 1:
+        return values[n - 1]
     i = int(s)
     return values[i] + (s - i) * (values[i + 1] - values[i])
+
+
+@jit
+def _linear_many(values, lo, hi, x, out):
+    for k in range(x.size):
+        out[k] = linear(values, lo, hi, x[k])
+    return out
 
 
 @jit
@@ -78,3 +87,18 @@ class Table2D:
         out = _bilinear_many(self.values, a0, b0, a1, b1, np.ascontiguousarray(pts[:, 0]),
                              np.ascontiguousarray(pts[:, 1]), np.empty(pts.shape[0]))
         return float(out[0]) if x.ndim == 1 else out
+
+
+@dataclass(frozen=True)
+class Table1D:
+    """A one-input map sampled evenly over ``box`` (lo, hi); ``table(x)`` interpolates linearly
+    (x a float or an array; saturated to the box)."""
+
+    values: np.ndarray
+    box: tuple[float, float] = (0.0, 1.0)
+
+    def __call__(self, x):
+        x = np.asarray(x, dtype=float)
+        flat = np.ascontiguousarray(x.ravel())
+        out = _linear_many(self.values, self.box[0], self.box[1], flat, np.empty(flat.size))
+        return float(out[0]) if x.ndim == 0 else out.reshape(x.shape)

@@ -17,8 +17,9 @@ import numpy as np
 
 from flexlift import constants as C
 from flexlift.errors import InputError
+from flexlift.physics.hydro import submerged_weight
 from flexlift.structure.hull import Hull
-from flexlift.structure.modes import Modes, mode_nodes
+from flexlift.structure.modes import Modes, compute_modes, mode_nodes
 
 log = logging.getLogger(__name__)
 
@@ -104,14 +105,14 @@ def _snap(x: float, hull: Hull) -> float:
     return float(hull.x_nodes[hull.nearest_node(x)])
 
 
-def plan_lift(scenario, hull: Hull, modes: Modes) -> LiftPlan:
-    """Size and lay out the bags of ``scenario`` on ``hull`` (whose ``modes`` place the
-    external bags)."""
+def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
+    """Size and lay out the bags of ``scenario`` on ``hull``; its dry ``modes`` place the
+    external bags of the paper's layout (computed here when needed and not given)."""
     env = scenario.environment
     lift = scenario.lift
     g, rho = env.gravity_m_s2, env.seawater_density_kg_m3
     dry = hull.total_mass * g
-    wet = dry * (1.0 - rho / env.steel_density_kg_m3)
+    wet = float(submerged_weight(hull.total_mass, g, rho, env.steel_density_kg_m3))
     required = lift.breakout_factor * wet
     cat = lift.catalogue_bag.lift_t * C.TONNE * g
     n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)
@@ -122,74 +123,64 @@ def plan_lift(scenario, hull: Hull, modes: Modes) -> LiftPlan:
     def make(name, kind, x, span, node, lift_force):
         return Bag(name, kind, float(x), span, node, float(lift_force), lift_force / (rho * g))
 
-    bags: list[Bag] = []
     if lift.bags is not None:
         bags = _explicit_bags(lift.bags, hull, per, g, make)
     else:
         n_int = min(lift.internal_bags, n)
-        n_ext = n - n_int
-        if n_ext:
-            n_flex = modes.n_modes - modes.n_rigid
-            if lift.layout_flexible_mode > n_flex:
-                raise InputError(
-                    "lift.layout_flexible_mode",
-                    lift.layout_flexible_mode,
-                    f"the model has flexible modes 1..{n_flex}; choose one of them or list lift.bags",
-                )
-            nodes = mode_nodes(modes, modes.flexible_index(lift.layout_flexible_mode))
-            if len(set(nodes)) != len(nodes):
-                raise InputError(
-                    "lift.layout_flexible_mode",
-                    lift.layout_flexible_mode,
-                    f"the nodes of flexible mode {lift.layout_flexible_mode} fall on the same "
-                    f"beam node ({[k + 1 for k in nodes]}); use more hull.elements or list lift.bags",
-                )
-            if len(nodes) != n_ext:
-                raise InputError(
-                    "lift.layout_flexible_mode",
-                    lift.layout_flexible_mode,
-                    f"flexible mode {lift.layout_flexible_mode} has {len(nodes)} nodes but the "
-                    f"plan needs {n_ext} external bags; use mode {n_ext - 1} or list lift.bags",
-                )
-            for k, node in enumerate(nodes):
-                bags.append(make(f"bag_{k + 1}", "external", hull.x_nodes[node], None, node, per))
-        if n_int:
-            fs = scenario.hull.frame_spacing_m
-            f0, f1 = scenario.hull.ballast_tank_frames
-            x0, x1 = _snap(f0 * fs, hull), _snap(f1 * fs, hull)
-            if not 0 <= f0 * fs < f1 * fs <= hull.length or x1 <= x0:
-                raise InputError(
-                    "hull.ballast_tank_frames",
-                    [f0, f1],
-                    f"the tank span must lie on the hull, 0..{hull.length / fs:.0f} frames",
-                )
-            edges = np.linspace(x0, x1, n_int + 1)
-            for k in range(n_int):
-                a, b = float(edges[k]), float(edges[k + 1])
-                bags.append(
-                    make(f"bag_{n_ext + k + 1}", "internal", 0.5 * (a + b), (a, b), None, per)
-                )
-
-    plan = LiftPlan(
-        dry_weight=dry,
-        wet_weight=wet,
-        breakout_factor=lift.breakout_factor,
-        required_lift=required,
-        catalogue_lift=cat,
-        bag_lift=per,
-        bags=tuple(bags),
-        gravity=g,
-    )
+        bags = (_mode_layout(lift, modes, hull, n - n_int, per, make)
+                + _tank_layout(scenario, hull, n_int, n - n_int, per, make))
+    plan = LiftPlan(dry_weight=dry, wet_weight=wet, breakout_factor=lift.breakout_factor,
+                    required_lift=required, catalogue_lift=cat, bag_lift=per, bags=tuple(bags),
+                    gravity=g)
     warnings = []
     if plan.shortfall > 0:
         short_t = plan.shortfall / (C.TONNE * g)
         warnings.append(
             f"lift shortfall: the bags carry {plan.total_lift / (C.TONNE * g):.0f} t of the "
             f"{required / (C.TONNE * g):.0f} t required ({short_t:.0f} t short); add a bag or "
-            "raise bag_lift_t"
-        )
+            "raise bag_lift_t")
         log.warning(warnings[-1])
     return replace(plan, warnings=tuple(warnings))
+
+
+def _mode_layout(lift, modes: Modes | None, hull: Hull, n_ext: int, per: float, make) -> list[Bag]:
+    """The paper's rule: ``n_ext`` external bags at the nodes of ``lift.layout_flexible_mode``."""
+    if not n_ext:
+        return []
+    if modes is None:
+        modes = compute_modes(hull)
+    k_mode = lift.layout_flexible_mode
+    n_flex = modes.n_modes - modes.n_rigid
+    if k_mode > n_flex:
+        raise InputError("lift.layout_flexible_mode", k_mode,
+                         f"the model has flexible modes 1..{n_flex}; choose one of them or list "
+                         "lift.bags")
+    nodes = mode_nodes(modes, modes.flexible_index(k_mode))
+    if len(set(nodes)) != len(nodes):
+        raise InputError("lift.layout_flexible_mode", k_mode,
+                         f"the nodes of flexible mode {k_mode} fall on the same beam node "
+                         f"({[k + 1 for k in nodes]}); use more hull.elements or list lift.bags")
+    if len(nodes) != n_ext:
+        raise InputError("lift.layout_flexible_mode", k_mode,
+                         f"flexible mode {k_mode} has {len(nodes)} nodes but the plan needs "
+                         f"{n_ext} external bags; use mode {n_ext - 1} or list lift.bags")
+    return [make(f"bag_{k + 1}", "external", hull.x_nodes[node], None, node, per)
+            for k, node in enumerate(nodes)]
+
+
+def _tank_layout(scenario, hull: Hull, n_int: int, n_ext: int, per: float, make) -> list[Bag]:
+    """``n_int`` internal bags end to end over the ballast-tank span, snapped to the nodes."""
+    if not n_int:
+        return []
+    fs = scenario.hull.frame_spacing_m
+    f0, f1 = scenario.hull.ballast_tank_frames
+    x0, x1 = _snap(f0 * fs, hull), _snap(f1 * fs, hull)
+    if not 0 <= f0 * fs < f1 * fs <= hull.length or x1 <= x0:
+        raise InputError("hull.ballast_tank_frames", [f0, f1],
+                         f"the tank span must lie on the hull, 0..{hull.length / fs:.0f} frames")
+    edges = np.linspace(x0, x1, n_int + 1)
+    return [make(f"bag_{n_ext + k + 1}", "internal", 0.5 * (edges[k] + edges[k + 1]),
+                 (float(edges[k]), float(edges[k + 1])), None, per) for k in range(n_int)]
 
 
 def _explicit_bags(specs, hull: Hull, default_lift: float, g: float, make) -> list[Bag]:

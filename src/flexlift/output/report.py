@@ -110,68 +110,25 @@ def _particulars(scenario) -> str:
     return f"<table><tbody>{body}</tbody></table>"
 
 
-def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
-    """The whole report as one HTML page (figures embedded as base64 PNG)."""
-    generated = generated or datetime.now(UTC)
-    # lift criteria (SPEC §7) decide the verdict; the other stages' checks are numerical
-    # self-checks of the analysis, shown apart but counted too
-    lift = {
-        f"{s.name.split(':', 1)[1]}: {k}": v
-        for s in stages
-        if s.name.startswith("simulate:")
-        for k, v in s.criteria.items()
-    }
-    checks = {
-        f"{s.name}: {k}": v
-        for s in stages
-        if not s.name.startswith("simulate:")
-        for k, v in s.criteria.items()
-    }
-    warnings = [(s.name, w) for s in stages for w in s.warnings]
+def _verdict(lift: dict, checks: dict, warnings: list) -> str:
+    """The verdict box: the lift criteria decide; the numerical checks and warnings count."""
     failed = [k for k, v in {**lift, **checks}.items() if not v]
     if not lift:
-        verdict = (
-            '<div class="verdict bad">The ascent was not simulated, so the lift criteria '
-            "were not evaluated.</div>"
-        )
-    elif not failed and not warnings:
-        verdict = (
-            '<div class="verdict ok"><b>Lift plan acceptable:</b> every lift criterion passed '
-            "in every control mode simulated, every numerical check passed, no warnings.</div>"
-        )
-    else:
-        text = f"{len(failed)} criterion(s) failed: {', '.join(failed)}" if failed else (
-            "all criteria passed"
-        )
-        if warnings:
-            text += f"; {len(warnings)} warning(s)"
-        verdict = f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.</div>'
-    headline = next((s.tables[0] for s in stages if s.name == "compare" and s.tables), None)
-    if headline is None:
-        headline = next((s.tables[0] for s in stages if s.name == "loads" and s.tables), None)
-    bases = dict.fromkeys("simulate" if s.name == "compare" else s.name.split(":")[0] for s in stages)
-    nav = "".join(f'<li><a href="#{b}">{_e(STAGE_TITLES.get(b, b))}</a></li>' for b in bases)
-    parts = [
-        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
-        f"<title>flexlift report: {_e(scenario.name)}</title><style>{_CSS}</style></head><body>",
-        f"<h1>flexlift report — {_e(scenario.name)}</h1>",
-        f"<p>{_e(scenario.description)}</p>" if scenario.description else "",
-        f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
-        f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC</p>",
-        verdict,
-        _table(headline) if headline is not None else "",
-        f"<nav><ul>{nav}</ul></nav>",
-        '<h2 id="particulars">Particulars</h2>',
-        _particulars(scenario),
-    ]
-    if lift:
-        parts += ['<h2 id="criteria">Lift criteria</h2>', _criteria(lift)]
-    if checks:
-        parts += ['<h2 id="checks">Numerical checks of the analysis</h2>', _criteria(checks)]
+        return ('<div class="verdict bad">The ascent was not simulated, so the lift criteria '
+                "were not evaluated.</div>")
+    if not failed and not warnings:
+        return ('<div class="verdict ok"><b>Lift plan acceptable:</b> every lift criterion passed '
+                "in every control mode simulated, every numerical check passed, no warnings.</div>")
+    text = f"{len(failed)} criterion(s) failed: {', '.join(failed)}" if failed else (
+        "all criteria passed")
     if warnings:
-        parts += ['<h2 id="warnings">Warnings</h2>'] + [
-            f'<div class="warn"><b>{_e(name)}:</b> {_e(w)}</div>' for name, w in warnings
-        ]
+        text += f"; {len(warnings)} warning(s)"
+    return f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.</div>'
+
+
+def _stage_sections(stages: list[StageOutput]) -> list[str]:
+    """One section per stage (control modes as sub-sections): lead, tables, figures."""
+    parts: list[str] = []
     seen: set[str] = set()
     for s in stages:
         base, _, variant = s.name.partition(":")
@@ -187,8 +144,48 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         if lead:
             parts.append(f"<p>{_e(lead)}</p>")
         if s.warnings:
-            parts.append(f'<p class="meta">{len(s.warnings)} warning(s): see <a href="#warnings">Warnings</a>.</p>')
+            parts.append(f'<p class="meta">{len(s.warnings)} warning(s): see '
+                         '<a href="#warnings">Warnings</a>.</p>')
         parts += [_table(t) for t in s.tables]
         parts += [_figure(f) for f in s.figures]
+    return parts
+
+
+def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
+    """The whole report as one HTML page (figures embedded as base64 PNG)."""
+    generated = generated or datetime.now(UTC)
+    # lift criteria (SPEC §7) decide the verdict; the other stages' checks are numerical
+    # self-checks of the analysis, shown apart but counted too
+    lift = {f"{s.name.split(':', 1)[1]}: {k}": v for s in stages
+            if s.name.startswith("simulate:") for k, v in s.criteria.items()}
+    checks = {f"{s.name}: {k}": v for s in stages
+              if not s.name.startswith("simulate:") for k, v in s.criteria.items()}
+    warnings = [(s.name, w) for s in stages for w in s.warnings]
+    headline = next((s.tables[0] for s in stages if s.name == "compare" and s.tables), None)
+    if headline is None:
+        headline = next((s.tables[0] for s in stages if s.name == "loads" and s.tables), None)
+    bases = dict.fromkeys("simulate" if s.name == "compare" else s.name.split(":")[0] for s in stages)
+    nav = "".join(f'<li><a href="#{b}">{_e(STAGE_TITLES.get(b, b))}</a></li>' for b in bases)
+    parts = [
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+        f"<title>flexlift report: {_e(scenario.name)}</title><style>{_CSS}</style></head><body>",
+        f"<h1>flexlift report — {_e(scenario.name)}</h1>",
+        f"<p>{_e(scenario.description)}</p>" if scenario.description else "",
+        f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
+        f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC</p>",
+        _verdict(lift, checks, warnings),
+        _table(headline) if headline is not None else "",
+        f"<nav><ul>{nav}</ul></nav>",
+        '<h2 id="particulars">Particulars</h2>',
+        _particulars(scenario),
+    ]
+    if lift:
+        parts += ['<h2 id="criteria">Lift criteria</h2>', _criteria(lift)]
+    if checks:
+        parts += ['<h2 id="checks">Numerical checks of the analysis</h2>', _criteria(checks)]
+    if warnings:
+        parts += ['<h2 id="warnings">Warnings</h2>'] + [
+            f'<div class="warn"><b>{_e(name)}:</b> {_e(w)}</div>' for name, w in warnings]
+    parts += _stage_sections(stages)
     parts.append("</body></html>")
     return "\n".join(p for p in parts if p)

@@ -1,0 +1,114 @@
+"""The package's layout keeps data and imports flowing one way (DESIGN.md): no import cycles,
+and each layer imports only from the layers before it."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "flexlift"
+
+#: each subpackage may import only from these (and the top-level helpers)
+ALLOWED = {
+    "scenario": set(),
+    "structure": {"scenario"},
+    "loads": {"scenario", "structure", "physics"},
+    "dynamics": {"scenario", "structure"},
+    "fuzzy": {"scenario"},
+    "physics": set(),  # the laws: first, used by the lift plan, the loop and the strength
+    "control": {"scenario", "fuzzy", "physics"},
+    "ascent": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control"},
+    "output": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
+               "ascent"},
+    "stages": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
+               "ascent", "output"},
+    "cli": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
+            "ascent", "output", "stages"},
+}
+TOP = {"constants", "errors", "_jit", "_struct", "__init__", "__main__"}
+#: modules every layer may use (atomic file writes)
+SHARED = {"flexlift.output.files"}
+
+
+def _module(path: Path) -> str:
+    rel = path.relative_to(SRC.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _imports(path: Path) -> set[str]:
+    """flexlift modules imported at module level or inside functions (any import counts)."""
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("flexlift"):
+            out.add(node.module)
+            for a in node.names:
+                out.add(f"{node.module}.{a.name}")
+        elif isinstance(node, ast.Import):
+            out |= {a.name for a in node.names if a.name.startswith("flexlift")}
+    return out
+
+
+def _graph():
+    mods = {_module(p): p for p in SRC.rglob("*.py")}
+    return mods, {m: {i for i in _imports(p) if i in mods and i != m} for m, p in mods.items()}
+
+
+def test_no_import_cycles_at_module_level():
+    mods, _ = _graph()
+    top_level = {}
+    for m, p in mods.items():
+        tree = ast.parse(p.read_text())
+        deps = set()
+        for node in tree.body:  # module-level imports only: a cycle there breaks import
+            if isinstance(node, ast.ImportFrom) and node.module and node.module in mods:
+                subs = {f"{node.module}.{a.name}" for a in node.names} & set(mods)
+                deps |= subs or {node.module}  # `from pkg import module` needs the module
+            elif isinstance(node, ast.Import):
+                deps |= {a.name for a in node.names if a.name in mods}
+        top_level[m] = deps - {m}
+    seen, stack = set(), []
+
+    def visit(m):
+        if m in stack:
+            raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(m):] + [m]))
+        if m in seen:
+            return
+        stack.append(m)
+        for d in sorted(top_level[m]):
+            visit(d)
+        stack.pop()
+        seen.add(m)
+
+    for m in sorted(top_level):
+        visit(m)
+
+
+@pytest.mark.parametrize("package", sorted(ALLOWED))
+def test_each_layer_imports_only_the_layers_before_it(package):
+    mods, graph = _graph()
+    bad = []
+    for m, deps in graph.items():
+        parts = m.split(".")
+        if len(parts) < 2 or parts[1] != package:
+            continue
+        for d in deps:
+            layer = d.split(".")[1] if d.count(".") else ""
+            if (layer in TOP or layer == package or layer in ALLOWED[package] or not layer
+                    or d in SHARED):
+                continue
+            bad.append(f"{m} imports {d}")
+    assert not bad, bad
+
+
+def test_the_library_does_not_print():
+    offenders = []
+    for p in SRC.rglob("*.py"):
+        if "cli" in p.relative_to(SRC).parts:
+            continue
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "print":
+                offenders.append(str(p.relative_to(SRC)))
+    assert not offenders, offenders
