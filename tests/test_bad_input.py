@@ -20,7 +20,7 @@ def _write(tmp_path, text: str):
         ("simulation:\n  time_step_s: -0.1\n", "simulate", "simulation.time_step_s"),
         ("control:\n  target_height_m: 400\n", "simulate", "control.target_height_m"),
         ("hull:\n  displacement_t: -3\n", "modes", "hull.displacement_t"),
-        ("lift:\n  layout_flexible_mode: 40\n", "loads", "layout_flexible_mode"),
+        ("lift:\n  layout: mode_nodes\n  layout_flexible_mode: 40\n", "loads", "layout_flexible_mode"),
         ("hull: [1, 2\n", "run", "malformed YAML"),
     ],
 )

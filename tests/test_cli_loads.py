@@ -141,7 +141,7 @@ def test_explicit_layout_json(tmp_path, capsys):
         ),
         ({"bag_lift_t": 0}, "bag_lift_t"),
         ({"bags": [{"name": "b", "kind": "external", "node": 3, "lift_t": -5}]}, "lift_t"),
-        ({"layout_flexible_mode": 40}, "lift.layout_flexible_mode"),
+        ({"layout": "mode_nodes", "layout_flexible_mode": 40}, "lift.layout_flexible_mode"),
     ],
 )
 def test_bad_input_exit_2_one_line(tmp_path, capsys, lift, match):

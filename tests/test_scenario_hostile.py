@@ -159,8 +159,14 @@ def test_an_empty_file_is_refused_not_read_as_the_tanker(tmp_path, capsys, text)
 
 
 def test_name_tanker_is_the_tanker(tmp_path, tanker):
+    """Every default is the tanker's, but for the lift plan a user's hull gets: the balanced
+    layout and the breakout pull in proportion to the suction (the built-in tanker file keeps
+    the paper's nodes of mode 3 and 150 t)."""
     again = load_scenario(_write(tmp_path, "name: tanker\n"))
-    assert again.model_dump(exclude={"description"}) == tanker.model_dump(exclude={"description"})
+    assert again.with_changes(**{"lift.layout": "mode_nodes", "control.breakout_pull_t": 150.0}
+                              ).model_dump(exclude={"description"}) == tanker.model_dump(
+        exclude={"description"})
+    assert again.lift.layout == "balanced" and again.control.breakout_pull_t is None
 
 
 # --------------------------------------------------------------------------- YAML structure
@@ -481,7 +487,7 @@ def test_other_strict_types():
         ({"faults": [{"kind": "explode", "bag": "bag_1", "time_s": 1}]}, ["faults[0]", "unknown kind 'explode'"]),
         ({"faults": [{"bag": "bag_1", "time_s": 1}]}, ["faults[0]", "needs a kind", "'sling_break'"]),
         ({"lift": {"bags": [{"name": "b", "kind": "external", "node": 2, "x_z": 1}]}},
-         ["unknown key 'lift.bags[0].x_z'", "valid keys here are: name, kind, x_m"]),
+         ["unknown key 'lift.bags[0].x_z'", "did you mean 'x_m'?", "valid keys here are: name, kind"]),
         ({"faults": [{"kind": "bag_rupture", "bag": "b", "time_s": 1, "leak": 3}]},
          ["unknown key 'faults[0].leak'", "leak_time_s"]),
         ({1: 2}, ["key 1 in the scenario is not a name"]),

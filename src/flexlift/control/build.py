@@ -13,6 +13,17 @@ from flexlift.fuzzy.tables import Table2D
 
 #: grid of the supervisor's lookup table over [-1, 1]^2
 TABLE_GRID = 201
+#: the default breakout pull as a fraction of the suction H_0 (the tanker's 150 t of 835 t)
+DEFAULT_PULL_FRACTION = 0.18
+
+
+def breakout_pull(scenario, H0: float) -> float:
+    """The breakout pull [N]: ``control.breakout_pull_t``, or by default
+    :data:`DEFAULT_PULL_FRACTION` of the suction ``H0`` [N]."""
+    t = scenario.control.breakout_pull_t
+    if t is None:
+        return DEFAULT_PULL_FRACTION * H0
+    return t * C.TONNE * scenario.environment.gravity_m_s2
 
 
 def shaped_pull(total: float, x_bags, x_centroid: float) -> np.ndarray:
@@ -80,7 +91,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
     bags = np.flatnonzero(plant.external)
     x = plant.x_point[bags]
     rho_g = a.rho_g
-    pull = c.breakout_pull_t * C.TONNE * plant.gravity / rho_g  # [m^3]
+    pull = breakout_pull(scenario, float(a.H0.sum())) / rho_g  # [m^3]
     if mode == "coordinated" and c.coordination.shape_breakout_pull and plant.kind == "coupled":
         xs = plant.strip_x
         hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * xs))

@@ -1,9 +1,11 @@
 """Hydrostatics, bag sizing and bag layout (SPEC §1, §3).
 
 How much lift the wreck needs, how many bags of the catalogue size, how much each is modelled
-to lift, and where they go: external parachute bags at the nodes of a chosen flexible mode,
-internal cylindrical bags end to end over the ballast-tank span snapped to the element grid,
-or an explicit layout from the scenario.
+to lift, and where they go: internal cylindrical bags end to end over the ballast-tank span;
+external parachute bags balanced on the centre of gravity (``lift.layout: balanced``, the
+default: :mod:`flexlift.loads.balance`), or at the nodes of a chosen flexible mode with the
+tanks snapped to the element grid (``mode_nodes``, the paper's rule); or an explicit layout
+from the scenario (``lift.bags``, clusters with ``count``).
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ import numpy as np
 
 from flexlift import constants as C
 from flexlift.errors import InputError
-from flexlift.physics.hydro import submerged_weight
+from flexlift.loads import balance
+from flexlift.physics.hydro import sphere_diameter, submerged_weight
 from flexlift.structure.hull import Hull
 from flexlift.structure.modes import Modes, compute_modes, mode_nodes
 
@@ -59,6 +62,20 @@ class LiftPlan:
     bags: tuple[Bag, ...]
     gravity: float = C.G  # [m/s^2]
     warnings: tuple[str, ...] = ()
+    layout: str = "explicit"  # "balanced", "mode_nodes" or "explicit" (lift.bags)
+
+    @property
+    def lift_centroid(self) -> float:
+        """Where the bags' rated lift acts [m from the aft end]."""
+        lifts = np.array([b.lift for b in self.bags])
+        return float(lifts @ np.array([b.x for b in self.bags]) / lifts.sum())
+
+    def lift_points(self) -> list[tuple[float, list[str]]]:
+        """The lift points (x [m], bag names) of the external bags, clusters together."""
+        points: dict[float, list[str]] = {}
+        for b in self.external:
+            points.setdefault(round(b.x, 9), []).append(b.name)
+        return sorted(points.items())
 
     @property
     def bag_count(self) -> int:
@@ -124,14 +141,20 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
         return Bag(name, kind, float(x), span, node, float(lift_force), lift_force / (rho * g))
 
     if lift.bags is not None:
-        bags = _explicit_bags(lift.bags, hull, per, g, make)
+        bags, layout = _explicit_bags(lift.bags, hull, per, g, make), "explicit"
     else:
         n_int = min(lift.internal_bags, n)
-        bags = (_mode_layout(lift, modes, hull, n - n_int, per, make)
-                + _tank_layout(scenario, hull, n_int, n - n_int, per, make))
+        layout = lift.layout
+        snap = layout == "mode_nodes"  # the paper rounds the tanks to the element grid
+        internal = _tank_layout(scenario, hull, n_int, n - n_int, per, make, snap)
+        if layout == "mode_nodes":
+            external = _mode_layout(lift, modes, hull, n - n_int, per, make)
+        else:
+            external = _balanced_layout(scenario, hull, n - n_int, per, internal, make)
+        bags = external + internal
     plan = LiftPlan(dry_weight=dry, wet_weight=wet, breakout_factor=lift.breakout_factor,
                     required_lift=required, catalogue_lift=cat, bag_lift=per, bags=tuple(bags),
-                    gravity=g)
+                    gravity=g, layout=layout)
     warnings = []
     if plan.shortfall > 0:
         short_t = plan.shortfall / (C.TONNE * g)
@@ -168,13 +191,41 @@ def _mode_layout(lift, modes: Modes | None, hull: Hull, n_ext: int, per: float, 
             for k, node in enumerate(nodes)]
 
 
-def _tank_layout(scenario, hull: Hull, n_int: int, n_ext: int, per: float, make) -> list[Bag]:
-    """``n_int`` internal bags end to end over the ballast-tank span, snapped to the nodes."""
+def _balanced_layout(scenario, hull: Hull, n_ext: int, per: float, internal: list[Bag],
+                     make) -> list[Bag]:
+    """``n_ext`` external bags balancing the hull (:mod:`flexlift.loads.balance`)."""
+    if not n_ext:
+        return []
+    env = scenario.environment
+    g, rho, rho_s = env.gravity_m_s2, env.seawater_density_kg_m3, env.steel_density_kg_m3
+    spans = [b.span for b in internal]
+    lifts = [b.lift for b in internal]
+    x, q, points = balance.design_load(
+        hull, submerged_weight(hull.mass_per_length, g, rho, rho_s),
+        submerged_weight(hull.point_masses, g, rho, rho_s), spans, lifts,
+        scenario.lift.breakout_factor)
+    start = balance.equal_share_positions(x, q, points, n_ext)
+    load = np.trapezoid(q, x) + sum(F for _, F in points)
+    moment = np.trapezoid(q * x, x) + sum(F * xp for xp, F in points)
+    pos = balance.refine(x, q, points, start, per, per * n_ext * moment / load, hull.length)
+    diameter = float(sphere_diameter(per / (rho * g)))
+    bags, k = [], 0
+    for xp, count in balance.clusters(pos, diameter):
+        for _ in range(count):
+            k += 1
+            bags.append(make(f"bag_{k}", "external", xp, None, None, per))
+    return bags
+
+
+def _tank_layout(scenario, hull: Hull, n_int: int, n_ext: int, per: float, make,
+                 snap: bool = True) -> list[Bag]:
+    """``n_int`` internal bags end to end over the ballast-tank span (its ends snapped to the
+    nearest nodes when ``snap``, as the paper does)."""
     if not n_int:
         return []
     fs = scenario.hull.frame_spacing_m
     f0, f1 = scenario.hull.ballast_tank_frames
-    x0, x1 = _snap(f0 * fs, hull), _snap(f1 * fs, hull)
+    x0, x1 = (_snap(f0 * fs, hull), _snap(f1 * fs, hull)) if snap else (f0 * fs, f1 * fs)
     if not 0 <= f0 * fs < f1 * fs <= hull.length or x1 <= x0:
         raise InputError("hull.ballast_tank_frames", [f0, f1],
                          f"the tank span must lie on the hull, 0..{hull.length / fs:.0f} frames")
@@ -205,14 +256,23 @@ def _explicit_bags(specs, hull: Hull, default_lift: float, g: float, make) -> li
                     )
                 near = hull.nearest_node(x)
                 node = near if abs(hull.x_nodes[near] - x) < 1e-9 * L else None
-            bags.append(make(s.name, "external", x, None, node, lift_force))
+            names = [s.name] if s.count == 1 else [f"{s.name}_{j + 1}" for j in range(s.count)]
+            bags += [make(nm, "external", x, None, node, lift_force) for nm in names]
         else:
             a, b = (float(v) for v in s.span_m)
             if not (0 <= a < b <= L):
                 raise InputError(
                     f"lift.bags.{s.name}.span_m", [a, b], f"must lie on the hull, within 0..{L} m"
                 )
+            if s.count != 1:
+                raise InputError(f"lift.bags.{s.name}.count", s.count,
+                                 "clusters are of external bags; an internal bag fills its span")
             bags.append(make(s.name, "internal", 0.5 * (a + b), (a, b), None, lift_force))
+    names = [b.name for b in bags]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise InputError("lift.bags", dup[0], "bag names must be unique, also within clusters "
+                         "(a cluster 'x' of 2 is x_1, x_2)")
     spans = sorted((b.span, b.name) for b in bags if b.span is not None)
     for (s1, n1), (s2, n2) in zip(spans, spans[1:]):
         if s2[0] < s1[1] - 1e-9:

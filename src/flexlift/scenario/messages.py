@@ -75,7 +75,8 @@ def format_error(err: dict, source: str, root: type[BaseModel]) -> str:
         loc, section, _ = key_path(err["loc"][:-1], root)
         unknown = clean(str(err["loc"][-1]), 40)
         key = f"{loc}.{unknown}" if loc else unknown
-        return f"{source}: unknown key '{key}'; valid keys here are: {', '.join(section.model_fields)}"
+        head = f"unknown key '{key}'; "
+        return f"{source}: {head}{_valid_keys(unknown, list(section.model_fields), 255 - len(head))}"
     value = err.get("input")
     ctx = err.get("ctx") or {}
     if kind == "invalid_key":  # from the Python API: a YAML file's keys are checked on reading
@@ -92,3 +93,19 @@ def format_error(err: dict, source: str, root: type[BaseModel]) -> str:
     if kind == "value_error" and isinstance(value, dict):  # a section's check names its fields
         return f"{source}: {loc + ': ' if loc else ''}{msg}"
     return f"{source}: {loc or 'scenario'} = {brief(value)}: {msg}"
+
+
+def _valid_keys(unknown: str, valid: list[str], room: int = 220) -> str:
+    """'did you mean ..?' for a near miss, then the valid keys, within ``room`` characters."""
+    import difflib
+
+    near = difflib.get_close_matches(unknown, valid, n=1, cutoff=0.6)
+    head = f"did you mean '{near[0]}'? " if near else ""
+    keys = ""
+    for k, name in enumerate(valid):
+        part = name if not keys else f", {name}"
+        if len(head) + len(keys) + len(part) > room - 24:
+            keys += f", ... (+{len(valid) - k}, see the README)"
+            break
+        keys += part
+    return f"{head}valid keys here are: {keys}"

@@ -74,6 +74,7 @@ class PointMass(_Section):
 Length = real(0.1, MAX_LENGTH_M)
 MassPerLength = real(0.01, 2.0e6)  # [kg/m]: a thin cable ~0.1, the largest ships ~1.4e6
 Stiffness = real(1.0e3, 1.0e15)  # EI [N m^2]: small pipes ~1e5 .. the largest ships ~1e14
+SectionModulus = real(1.0e-9, 1.0e3)  # Z [m^3]: a 10 mm rod ~1e-7 .. the largest ships ~100
 
 
 class Hull(_Section):
@@ -96,6 +97,11 @@ class Hull(_Section):
     frame_spacing_m: real(0.1, 10) = 0.57  # ships' frames are 0.5..4 m apart
     ballast_tank_frames: tuple[real(0, 100_000), real(0, 100_000)] = (27, 113)
     modal_damping: Annotated[Real, Field(ge=0, lt=1)] = 0.02
+    # hull girder strength: sigma = M / Z against the allowable stress. The tanker's values are
+    # assumed, not published: Z about what IACS UR S7's minimum formula gives when extended to
+    # L = 78 m, B = 12 m, Cb 0.75; 175 MPa the permissible bending stress of mild steel (k = 1)
+    section_modulus_m3: SectionModulus | list[SectionModulus] = 0.85
+    allowable_stress_MPa: real(1, 2_000) = 175.0
 
     @model_validator(mode="after")
     def _check(self) -> Hull:
@@ -103,7 +109,7 @@ class Hull(_Section):
             raise ValueError(
                 "give exactly one of displacement_t (uniform) or mass_per_length_kg_m"
             )
-        for name in ("mass_per_length_kg_m", "bending_stiffness_Nm2"):
+        for name in ("mass_per_length_kg_m", "bending_stiffness_Nm2", "section_modulus_m3"):
             v = getattr(self, name)
             if isinstance(v, list) and len(v) != self.elements:
                 raise ValueError(
@@ -138,11 +144,13 @@ class BagSpec(_Section):
     """One explicitly placed bag (overrides the automatic layout when ``lift.bags`` is given).
 
     External (parachute) bags act at a point: ``x_m`` or ``node`` (1-based). Internal
-    (cylindrical) bags act over a span: ``span_m`` = [x0, x1].
+    (cylindrical) bags act over a span: ``span_m`` = [x0, x1]. ``count`` > 1 makes a cluster:
+    that many bags at the one lift point, named ``<name>_1`` .. ``<name>_<count>``.
     """
 
     name: Name
     kind: Literal["external", "internal"]
+    count: whole(1, MAX_ITEMS) = 1  # a cluster: this many identical bags at one lift point
     x_m: real(0, MAX_LENGTH_M) | None = None
     node: whole(1, MAX_ELEMENTS + 1) | None = None
     span_m: tuple[real(0, MAX_LENGTH_M), real(0, MAX_LENGTH_M)] | None = None
@@ -169,7 +177,10 @@ class Lift(_Section):
     breakout_factor: real(1, 5) = 1.3  # required lift / wet weight; 1.3 typical, stiff clay ~2
     catalogue_bag: CatalogueBag = CatalogueBag()
     internal_bags: whole(0, MAX_ITEMS) = 3
-    layout_flexible_mode: whole(1, 100) = 3  # external bags at this flexible mode's nodes
+    # balanced: lift centroid on the centre of gravity, small static bending moment (a user's
+    # hull); mode_nodes: the paper's rule, external bags at the nodes of a flexible mode
+    layout: Literal["balanced", "mode_nodes"] = "balanced"
+    layout_flexible_mode: whole(1, 100) = 3  # mode_nodes: the flexible mode whose nodes carry the bags
     bag_lift_t: BagLift | None = None  # modelled lift per bag; default from the bag-count rule
     bags: Annotated[list[BagSpec], Field(max_length=MAX_ITEMS)] | None = None  # explicit layout
 
@@ -278,7 +289,10 @@ class Control(_Section):
     target_height_m: real(0.01, 11_000) = 300.0  # above the seabed, below the surface
     ascent_speed_m_s: real(0.001, 5) = 0.2  # planned; ascents are kept well below 1 m/s
     ascent_acceleration_m_s2: real(1e-5, 1) = 0.002
-    breakout_pull_t: real(0, MAX_MASS_T) = 150.0  # extra buoyancy held until the hull lifts off
+    # extra buoyancy held until the hull lifts off; default (null) 18 % of the suction H_0,
+    # the tanker's 150 t of 835 t: it breaks out in T_b (1/0.18 - 1) = 4.6 T_b plus the fill
+    breakout_pull_t: real(0, MAX_MASS_T) | None = None
+    purge_margin: real(0.05, 1) = 0.7  # eta: the planned speed keeps the purge this far below capacity
     volume_deadband_m3: real(0, 10_000) = 0.2  # |V_d - V| below this: neither fill nor purge
     height_integral_gain_m2_s: real(0, 100) = 0.05  # neutral volume adapted per m of error [m^3/(m s)]
     measurement_filter_s: real(0, 1_000) = 0.0  # low-pass time constant of measured height, speed
@@ -294,7 +308,8 @@ class Control(_Section):
 class Limits(_Section):
     """Acceptance criteria (SPEC §1, §7)."""
 
-    ascent_velocity_m_s: real(0.001, 100) = 0.6
+    ascent_velocity_m_s: real(0.001, 100) = 0.6  # the largest upward speed of any bag point
+    descent_velocity_m_s: real(0.001, 100) = 0.6  # the largest downward speed once separated
     pitch_deg: real(0.01, 90) = 15.0
     arrival_tolerance_m: real(0.001, 1_000) = 1.0
     surface_clearance_m: real(0, 1_000) = 0.0  # a bag top closer than this to the surface breaches
@@ -457,7 +472,8 @@ def parse_scenario(data, source: str = "scenario") -> Scenario:
 
 #: what an empty file gets told
 EMPTY = ("the file is empty (or only comments); an empty scenario is not read as the tanker: "
-         "write `name: tanker` to start from the tanker's defaults")
+         "write `name: tanker` to start from the tanker's defaults (with flexlift's balanced "
+         "layout and breakout pull; the built-in `tanker` keeps the paper's)")
 
 
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:

@@ -1,0 +1,108 @@
+"""A balanced layout of the external bags (SPEC §3): the lift centroid on the centre of gravity
+of what the bags carry, and a small static bending moment.
+
+The load the external bags must balance is the plan's downward load (the breakout factor times
+the submerged weight, distributed like the mass, point masses included) less the internal
+bags' lift over their spans. With n equal bags:
+
+1. **Equal shares.** The hull is cut into n segments that each carry 1/n of that load, and a
+   bag goes to each segment's load centroid. The bags then close the force and the moment
+   (their lift centroid is the load's centroid) and each carries its own stretch, which keeps
+   the bending moment small.
+2. **Least squares.** The positions are refined to minimise the mean square static bending
+   moment along the hull (``scipy.optimize.minimize``, SLSQP) with the lift centroid held on
+   the centre of gravity and every bag on the hull.
+3. **Clusters.** Bags closer together than a bag's diameter share one lift point, at their
+   mean position (the moment is unchanged): a heavy engine room gets a cluster, not bags
+   jammed side by side.
+
+Positions are in metres anywhere along the hull; nothing is snapped to the mesh.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import minimize
+
+from flexlift.loads.strength import shear_moment
+
+#: grid points along the hull for the load and the bending moment
+GRID = 2001
+
+
+def design_load(hull, weight_per_length, point_weight, internal_spans, internal_lift,
+                factor: float) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float]]]:
+    """The downward load the external bags balance: (x [m], line load [N/m], point loads
+    [(x, N)]), down positive; ``weight_per_length`` (n_el,) [N/m] and ``point_weight``
+    (n_nodes,) [N] the submerged weight, times ``factor``; the internal bags' ``internal_lift``
+    [N] each over ``internal_spans`` [(x0, x1)] taken off."""
+    L = hull.length
+    x = np.linspace(0.0, L, GRID)
+    q = factor * weight_per_length[hull.element_of(x)]
+    for (a, b), F in zip(internal_spans, internal_lift):
+        q = q - np.where((x >= a) & (x <= b), F / (b - a), 0.0)
+    points = [(float(xn), float(factor * w)) for xn, w in zip(hull.x_nodes, point_weight) if w > 0]
+    return x, q, points
+
+
+def equal_share_positions(x: np.ndarray, q: np.ndarray, points, n: int) -> np.ndarray:
+    """Load centroids of ``n`` segments of equal load [m] (step 1 of the module docstring);
+    where the net load is negative (internal lift above the weight) it counts as none."""
+    qp = np.maximum(q, 0.0)
+    dC = 0.5 * (qp[1:] + qp[:-1]) * np.diff(x)
+    dM = 0.5 * (qp[1:] * x[1:] + qp[:-1] * x[:-1]) * np.diff(x)
+    cells = [(xm, c, m) for xm, c, m in zip(0.5 * (x[1:] + x[:-1]), dC, dM)]
+    cells += [(xp, F, F * xp) for xp, F in points if F > 0]
+    cells.sort(key=lambda c: c[0])
+    C = np.array([c[1] for c in cells])
+    Mx = np.array([c[2] for c in cells])
+    total = C.sum()
+    cum = np.cumsum(C)
+    out = np.empty(n)
+    edges = np.linspace(0.0, total, n + 1)
+    for k in range(n):
+        lo, hi = edges[k], edges[k + 1]
+        # the share of each cell inside [lo, hi] of the cumulative load
+        start = cum - C
+        frac = np.clip((np.minimum(cum, hi) - np.maximum(start, lo)) / np.where(C > 0, C, 1.0), 0, 1)
+        w = frac * C
+        out[k] = (frac * Mx).sum() / w.sum() if w.sum() > 0 else x[0] + (k + 0.5) * (x[-1] - x[0]) / n
+    return np.sort(out)
+
+
+def static_moment(x, q_down, points_down, bag_x, bag_lift):
+    """(shear [N], bending moment [N m]) along ``x`` under the net design load of
+    :func:`design_load` (down; the internal bags already in it) and the external bags (up)."""
+    pts = [(xp, -F) for xp, F in points_down] + [(float(b), float(bag_lift)) for b in bag_x]
+    return shear_moment(x, -q_down, pts)
+
+
+def refine(x, q, points, start: np.ndarray, bag_lift: float, x_target_moment: float,
+           length: float) -> np.ndarray:
+    """Positions minimising the mean square static moment (step 2), the bags' first moment
+    kept at ``x_target_moment`` [N m] (their lift centroid on the centre of gravity)."""
+
+    def cost(p):
+        _, M = static_moment(x, q, points, p, bag_lift)
+        return float(np.mean(M**2))
+
+    scale = cost(start) or 1.0
+    res = minimize(lambda p: cost(p) / scale, start, method="SLSQP",
+                   bounds=[(0.0, length)] * start.size,
+                   constraints=[{"type": "eq",
+                                 "fun": lambda p: (bag_lift * p.sum() - x_target_moment)
+                                 / (bag_lift * length)}],
+                   options={"maxiter": 200, "ftol": 1e-10})
+    p = np.sort(res.x) if res.success and cost(res.x) <= cost(start) else start
+    return p
+
+
+def clusters(positions: np.ndarray, min_spacing: float) -> list[tuple[float, int]]:
+    """Lift points (x [m], number of bags) merging bags closer than ``min_spacing`` [m]."""
+    groups: list[list[float]] = []
+    for p in np.sort(positions):
+        if groups and p - np.mean(groups[-1]) < min_spacing:
+            groups[-1].append(float(p))
+        else:
+            groups.append([float(p)])
+    return [(float(np.mean(g)), len(g)) for g in groups]
