@@ -90,7 +90,8 @@ def test_run_stage_contract(tmp_path, tanker):
     assert res.name == "loads"
     assert [f.path.name for f in res.figures] == ["loads_diagram.png", "loads_shear_moment.png"]
     assert all(f.path.is_file() and f.caption for f in res.figures)
-    assert [t.title.split(" (")[0] for t in res.tables] == ["Lift bags", "Longitudinal strength"]
+    assert [t.title.split(" (")[0] for t in res.tables] == ["Lift bags", "Longitudinal strength",
+                                                          "Checks before the run"]
     assert len(res.tables[0].rows) == 7
     assert res.warnings == []
     # without a folder: the same summary, nothing written

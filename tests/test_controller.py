@@ -59,15 +59,27 @@ def _step(C, S, t, z, zd, V, separated):
 
 
 def test_breakout_pull_then_a_neutral_supervisor(tanker, plant):
-    C, S = _controller(tanker, plant)
-    Vn = C.V_neutral
-    pull = 150e3 / 1025.0 / 4  # m3 per external bag
-    _step(C, S, 0.0, 0.0, 0.0, Vn, False)
-    np.testing.assert_allclose(S.V_d, Vn + pull)
-    assert np.all(S.fill > 0) and np.all(S.opening == 0)
-    _step(C, S, 1.0, 0.0, 0.0, Vn, True)  # separated at the reference, no excess
-    np.testing.assert_allclose(S.z_ref, 0.0)
-    assert np.all(np.abs(S.u) < 1e-6)
+    """The pull on top of the neutral volumes: shared equally (shape_breakout_pull false), or
+    shaped like the suction (the default): the same total, its centroid on the hold's."""
+    pull = 150e3 / 1025.0  # m3 in all
+    for shaped in (False, True):
+        sc = tanker.with_changes(**{"control.shape_breakout_pull": shaped})
+        C, S = _controller(sc, plant)
+        Vn = C.V_neutral
+        _step(C, S, 0.0, 0.0, 0.0, Vn, False)
+        extra = S.V_d - Vn
+        assert extra.sum() == pytest.approx(pull, rel=1e-9)
+        if shaped:
+            xs, a = plant.strip_x, plant.arrays
+            hold = float(np.sum(a.strip_weight * a.strip_hold * xs))
+            assert float(extra @ C.x) / pull == pytest.approx(hold, rel=1e-6)
+            assert np.ptp(extra) > 1.0  # not equal shares: the tanker's hold is not centred
+        else:
+            np.testing.assert_allclose(extra, pull / 4)
+        assert np.all(S.fill > 0) and np.all(S.opening == 0)
+        _step(C, S, 1.0, 0.0, 0.0, Vn, True)  # separated at the reference, no excess
+        np.testing.assert_allclose(S.z_ref, 0.0)
+        assert np.all(np.abs(S.u) < 1e-6)
 
 
 def test_purge_on_excess_with_anti_windup(tanker, plant):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from flexlift import constants as C
@@ -192,3 +193,29 @@ def test_all_internal_bags_need_no_mode():
     p, hull = _plan(**{"lift.internal_bags": 9, "lift.layout_flexible_mode": 99})
     assert p.bag_count == 7 and not p.external  # min(internal_bags, n)
     assert p.internal[0].span[0] == pytest.approx(hull.x_nodes[2])
+
+
+def test_balance_moment_cost_is_the_static_moment_and_its_gradient():
+    """refine minimises balance.moment_cost: its value must be the mean square of
+    static_moment (strength.shear_moment) and its gradient the derivative of that."""
+    from scipy.optimize import approx_fprime
+
+    from flexlift.loads import balance
+
+    x = np.linspace(0.0, 100.0, 401)
+    q = 1e4 * (1.0 + 0.5 * np.sin(x / 15.0))
+    pts = [(70.0, 2e5)]
+    p = np.array([12.03, 41.01, 66.02, 88.04])
+    lift = 3.1e5
+
+    def cost(pp):
+        return float(np.mean(balance.static_moment(x, q, pts, pp, lift)[1] ** 2))
+
+    _, M0 = balance.static_moment(x, q, pts, [], lift)
+    value, grad = balance.moment_cost(x, M0, p, lift)
+    assert value == pytest.approx(cost(p), rel=1e-12)
+    assert grad == pytest.approx(approx_fprime(p, cost, 1e-6), rel=1e-3)
+    target = lift * p.sum()
+    out = balance.refine(x, q, pts, p, lift, target, 100.0)
+    assert cost(out) < 0.5 * cost(p)
+    assert lift * out.sum() == pytest.approx(target, rel=1e-6)

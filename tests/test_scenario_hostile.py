@@ -462,8 +462,8 @@ def test_integers_are_real_numbers_and_whole_reals_are_integers():
 
 
 def test_other_strict_types():
-    _refused({"control": {"coordination": {"shape_breakout_pull": "yes"}}}, "shape_breakout_pull")
-    _refused({"control": {"coordination": {"shape_breakout_pull": 1}}}, "shape_breakout_pull")
+    _refused({"control": {"shape_breakout_pull": "yes"}}, "shape_breakout_pull")
+    _refused({"control": {"shape_breakout_pull": 1}}, "shape_breakout_pull")
     _refused({"description": 2024}, "description = 2024")
     _refused({"name": b"bytes"}, "name = b'bytes'")
 

@@ -44,6 +44,7 @@ from flexlift.ascent.state import (
     EV_ARRIVAL,
     EV_BREAKOUT,
     EV_LIFTOFF,
+    EV_LIMIT_DESCENT,
     EV_LIMIT_PITCH,
     EV_LIMIT_VELOCITY,
     EV_NUMERICS,
@@ -54,6 +55,7 @@ from flexlift.ascent.state import (
     F_FRESH,
     F_HAVE_B,
     F_LIFTOFF,
+    F_LIMIT_D,
     F_LIMIT_P,
     F_LIMIT_V,
     F_MATRIX,
@@ -226,17 +228,25 @@ def events(t, A, R, W, X, rec, w_min):
 
 @jit
 def limits(t, A, R, W, X, rec):
-    """Running maxima of the bag speeds and the pitch, and their limit events (once each)."""
-    v, i_max = 0.0, -1
+    """Running maxima of the bags' upward and downward speeds and of the pitch, and their
+    limit events (once each)."""
+    up, down, i_up, i_down = 0.0, 0.0, -1, -1
     for i in range(A.nb):
-        s = abs(R.zd[i]) * W.attached[i]
-        if s > v:
-            v, i_max = s, i
-    if v > R.scalars[0]:
-        R.scalars[0] = v
-        if v > X.v_limit and not R.counters[1] & F_LIMIT_V:
+        s = R.zd[i] * W.attached[i]
+        if s > up:
+            up, i_up = s, i
+        elif -s > down:
+            down, i_down = -s, i
+    if up > R.scalars[0]:
+        R.scalars[0] = up
+        if up > X.v_limit and not R.counters[1] & F_LIMIT_V:
             R.counters[1] |= F_LIMIT_V
-            log_event(rec, t, EV_LIMIT_VELOCITY, i_max, v)
+            log_event(rec, t, EV_LIMIT_VELOCITY, i_up, up)
+    if down > R.scalars[4]:
+        R.scalars[4] = down
+        if down > X.v_down_limit and not R.counters[1] & F_LIMIT_D:
+            R.counters[1] |= F_LIMIT_D
+            log_event(rec, t, EV_LIMIT_DESCENT, i_down, down)
     pitch = abs(math.atan(dot(A.pitch_row, R.q)))
     if pitch > R.scalars[1]:
         R.scalars[1] = pitch
@@ -362,6 +372,7 @@ def finish_step(t, A, R, W, X, rec, noise):
         if out > 0.0:
             n -= out
             R.vented[i] += out * A.RT / p
+            R.vented_free[i] += out * A.RT / A.p_atm
         R.n[i], R.p[i] = n, p
         R.V[i] = gas_volume(n, p, A.RT, A.capacity[i])
     R.counters[1] |= F_FRESH
@@ -395,7 +406,9 @@ def _gas_step(i, dt, A, R, W):
     R.gas_local[i] += fill * dt
     R.gas_free[i] += 0.5 * (free_air(fill * dt, p0, A.p_atm) + free_air(fill * dt, p1, A.p_atm))
     R.purged[i] += 0.5 * dt * (purge0 + purge1)
+    R.purged_free[i] += 0.5 * dt * (free_air(purge0, p0, A.p_atm) + free_air(purge1, p1, A.p_atm))
     R.vented[i] += 0.5 * dt * W.leak[i] * A.RT * (R.n[i] / p0 + n_pred / p1)
+    R.vented_free[i] += 0.5 * dt * W.leak[i] * A.RT * (R.n[i] + n_pred) / A.p_atm
     R.p[i] = p1
     return max(R.n[i] + 0.5 * dt * (R.ndot[i] + ndot1), 0.0)
 

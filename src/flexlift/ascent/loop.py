@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from flexlift.ascent import kernel
+from flexlift.ascent.checks import refuse_unworkable
 from flexlift.ascent.faults import apply_fault, check_faults, fault_step
 from flexlift.ascent.noise import ForceNoise, MeasurementNoise
 from flexlift.ascent.paper import paper_plant
@@ -62,6 +63,7 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
         plant = paper_plant(scenario) if mode == "paper" else coupled_plant(scenario)
     check_faults(scenario, plant.names)
     check_neutral(plant)
+    refuse_unworkable(scenario, plant)
     return Ascent(scenario, plant, mode, T_end, engine).run(progress)
 
 
@@ -81,7 +83,8 @@ class Ascent:
             k_out=max(1, int(round(sim.output_interval_s / dt))),
             k_str=max(1, int(round(sim.strength_interval_s / dt))),
             target=c.target_height_m, tol=lim.arrival_tolerance_m, hold_time=sim.hold_time_s,
-            v_limit=lim.ascent_velocity_m_s, pitch_limit=math.radians(lim.pitch_deg),
+            v_limit=lim.ascent_velocity_m_s, v_down_limit=lim.descent_velocity_m_s,
+            pitch_limit=math.radians(lim.pitch_deg),
             top_limit=a.water_depth - lim.surface_clearance_m - a.top_offset,
             external=self.external is not None)
         self.R = new_run_state(a.nr, a.nb, a.ns, a.ng)

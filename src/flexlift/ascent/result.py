@@ -19,6 +19,7 @@ from flexlift.ascent.state import (
     EV_ARRIVAL,
     EV_BREAKOUT,
     EV_LIFTOFF,
+    EV_LIMIT_DESCENT,
     EV_LIMIT_PITCH,
     EV_LIMIT_VELOCITY,
     EV_NUMERICS,
@@ -51,8 +52,9 @@ HULL_VARS = {
     "uplift": ("N", "net uplift U = sum of bag lift - wet weight"),
     "contact_force": ("N", "seabed contact force"),
 }
-CRITERIA = ("ascent_velocity", "pitch", "reached_target", "no_surface_breach", "no_resettle")
-EVENT_KINDS = {EV_SEPARATION: "separation", EV_BREAKOUT: "breakout", EV_ARRIVAL: "arrival",
+CRITERIA = ("ascent_velocity", "descent_velocity", "pitch", "reached_target", "no_surface_breach",
+            "no_resettle")
+EVENT_KINDS = {EV_LIMIT_DESCENT: "limit_descent_velocity", EV_SEPARATION: "separation", EV_BREAKOUT: "breakout", EV_ARRIVAL: "arrival",
                EV_TARGET_HELD: "target_held", EV_SURFACE_BREACH: "surface_breach",
                EV_LIMIT_VELOCITY: "limit_ascent_velocity", EV_LIMIT_PITCH: "limit_pitch",
                EV_LIFTOFF: "liftoff", EV_RESETTLE: "resettle", EV_NUMERICS: "numerics_failed"}
@@ -81,6 +83,11 @@ class Result:
         return self.dataset.attrs["control"]
 
     @property
+    def reasons(self) -> dict[str, str]:
+        """Each failed criterion's cause, with times and numbers (:func:`explain`)."""
+        return json.loads(self.dataset.attrs.get("reasons", "{}"))
+
+    @property
     def error(self) -> str:
         return self.dataset.attrs.get("error", "")
 
@@ -96,12 +103,15 @@ class Result:
         arr = {str(b): (None if np.isnan(v) else round(float(v), 1))
                for b, v in zip(ds.bag.values, ds.arrival_time.values)}
         keys = ("breakout_time_s", "separation_time_s", "arrival_spread_s",
-                "max_ascent_velocity_ms", "max_pitch_deg", "max_bending_moment_MNm",
-                "max_shear_force_MN", "gas_used_local_m3", "gas_used_free_air_m3", "end_time_s")
+                "max_ascent_velocity_ms", "max_descent_velocity_ms", "max_pitch_deg",
+                "max_bending_moment_MNm", "max_shear_force_MN", "max_stress_MPa",
+                "max_utilisation", "gas_used_local_m3", "gas_used_free_air_m3",
+                "gas_initial_free_air_m3", "gas_total_free_air_m3", "gas_vented_free_air_m3",
+                "gas_purged_free_air_m3", "supply_bag_hours", "end_time_s")
         out = {"control": self.control, **{k: h[k] for k in keys}, "arrival_time_s": arr,
                "final_height_m": {str(b): round(float(v), 2)
                                   for b, v in zip(ds.bag.values, ds.height.values[-1])},
-               "criteria": self.criteria,
+               "criteria": self.criteria, "reasons": self.reasons,
                "events": [{"time_s": e["time_s"], "kind": e["kind"], "bag": e["bag"]}
                           for e in self.events],
                "error": self.error or None}
@@ -120,9 +130,11 @@ def event_list(run) -> list[dict]:
     for k in range(int(rec.counts[2])):
         code, i, val = int(rec.ev_code[k]), int(rec.ev_index[k]), float(rec.ev_value[k])
         kind = EVENT_KINDS[code]
-        bag = P.names[i] if code in (EV_ARRIVAL, EV_SURFACE_BREACH, EV_LIMIT_VELOCITY) else None
+        bag = (P.names[i] if code in (EV_ARRIVAL, EV_SURFACE_BREACH, EV_LIMIT_VELOCITY,
+                                      EV_LIMIT_DESCENT) else None)
         detail = {EV_SURFACE_BREACH: "the run ends at the surface",
-                  EV_LIMIT_VELOCITY: f"{val:.2f} m/s",
+                  EV_LIMIT_VELOCITY: f"{val:.2f} m/s upward",
+                  EV_LIMIT_DESCENT: f"{val:.2f} m/s downward",
                   EV_LIMIT_PITCH: f"{np.degrees(val):.1f} deg",
                   EV_LIFTOFF: "the whole hull is clear of the seabed",
                   EV_RESETTLE: "the hull touched the seabed again",
@@ -169,7 +181,11 @@ def build_result(run, error: str | None) -> Result:
                "gas_vented": (R.vented, "m3", "gas spilled, vented or leaked, at local pressure"),
                "gas_purged": (R.purged, "m3", "gas purged, at local pressure"),
                "gas_used_local": (R.gas_local, "m3", "gas filled, at local pressure"),
-               "gas_used_free_air": (R.gas_free, "m3", "gas filled, as free air at the surface")}
+               "gas_used_free_air": (R.gas_free, "m3", "gas filled, as free air at the surface"),
+               "gas_vented_free_air": (R.vented_free, "m3", "gas vented, as free air"),
+               "gas_purged_free_air": (R.purged_free, "m3", "gas purged, as free air"),
+               "gas_initial_local": (P.neutral_volume, "m3", "gas at the start, at local pressure"),
+               "gas_initial_free_air": (_initial_free_air(P), "m3", "gas at the start, as free air")}
     for name, (vals, unit, long) in per_bag.items():
         data[name] = (("bag",), np.array(vals, dtype=float), {"units": unit, "long_name": long})
     data["bag_kind"] = (("bag",), np.array(["external" if e else "internal" for e in P.external]),
@@ -190,17 +206,57 @@ def build_result(run, error: str | None) -> Result:
             data[name] = (("x",), arr, {"units": "N m" if "moment" in name else "N",
                                         "long_name": f"envelope: {how}"})
         Mmax, Vmax = float(np.abs(Ms).max()), float(np.abs(Vs).max())
+        Z = section_modulus(run.scenario, xg)
+        allow = run.scenario.hull.allowable_stress_MPa * 1e6
+        stress = np.abs(Ms).max(0) / Z
+        data["stress_max"] = (("x",), stress, {"units": "Pa", "long_name": "envelope: largest hull girder bending stress |M| / Z"})
+        data["utilisation_max"] = (("x",), stress / allow, {"units": "1", "long_name": "envelope: stress over the allowable stress"})
     ds = xr.Dataset(data, coords=coords)
     events = event_list(run)
     _attributes(ds, run, events, t, Mmax, Vmax, error)
     return Result(ds)
 
 
+def section_modulus(scenario, x) -> np.ndarray:
+    """The hull girder section modulus Z [m^3] at ``x`` [m] (one value or one per element of
+    the scenario's hull)."""
+    Z = np.broadcast_to(np.asarray(scenario.hull.section_modulus_m3, dtype=float),
+                        (scenario.hull.elements,))
+    e = np.clip((np.asarray(x) / scenario.hull.length_m * Z.size).astype(int), 0, Z.size - 1)
+    return Z[e]
+
+
+def _initial_free_air(P) -> np.ndarray:
+    """Each bag's gas at the start as free air at the surface [m^3] (n R T / p_atm)."""
+    return P.initial_moles() * P.arrays.RT / P.arrays.p_atm
+
+
+def gas_budget(run) -> dict:
+    """The whole gas budget [m^3] and the supply time (headline keys): the initial fill, the
+    top-up during the run, the vented and purged gas, as free air and at local pressure."""
+    R, P, sc = run.R, run.plant, run.scenario
+    init_free, init_local = _initial_free_air(P), P.neutral_volume
+    q_in = sc.gas.fill_rate_max_m3_s
+    local = init_local + R.gas_local  # filled at local pressure, per bag
+    return {
+        "gas_initial_free_air_m3": _r(init_free.sum(), 1),
+        "gas_initial_local_m3": _r(init_local.sum(), 1),
+        "gas_topup_free_air_m3": _r(R.gas_free.sum(), 1),
+        "gas_topup_local_m3": _r(R.gas_local.sum(), 1),
+        "gas_total_free_air_m3": _r(init_free.sum() + R.gas_free.sum(), 1),
+        "gas_vented_free_air_m3": _r(R.vented_free.sum(), 1),
+        "gas_purged_free_air_m3": _r(R.purged_free.sum(), 1),
+        "supply_bag_hours": _r(local.sum() / q_in / 3600.0, 2),
+        "supply_hours_parallel": _r(local.max() / q_in / 3600.0, 2),
+    }
+
+
 def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
     sc, R, P = run.scenario, run.R, run.plant
-    vmax, pmax = float(R.scalars[0]), float(R.scalars[1])
+    vmax, pmax, vdown = float(R.scalars[0]), float(R.scalars[1]), float(R.scalars[4])
     kinds = {e["kind"] for e in events}
     crit = {"ascent_velocity": vmax < sc.limits.ascent_velocity_m_s,
+            "descent_velocity": vdown < sc.limits.descent_velocity_m_s,
             "pitch": float(np.degrees(pmax)) < sc.limits.pitch_deg,
             "reached_target": "target_held" in kinds,
             "no_surface_breach": "surface_breach" not in kinds,
@@ -216,14 +272,91 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
         "breakout_time_s": _r(first("breakout"), 1),
         "arrival_spread_s": _r(spread, 1),
         "max_ascent_velocity_ms": _r(vmax, 4),
+        "max_descent_velocity_ms": _r(vdown, 4),
         "max_pitch_deg": _r(np.degrees(pmax), 4),
         "max_bending_moment_MNm": _r(Mmax / 1e6, 3) if Mmax is not None else None,
         "max_shear_force_MN": _r(Vmax / 1e6, 4) if Vmax is not None else None,
         "gas_used_local_m3": _r(R.gas_local.sum(), 1),
         "gas_used_free_air_m3": _r(R.gas_free.sum(), 1),
+        **gas_budget(run),
+        "max_stress_MPa": _r(float(ds["stress_max"].max()) / 1e6, 2) if "stress_max" in ds else None,
+        "max_utilisation": _r(float(ds["utilisation_max"].max()), 3) if "utilisation_max" in ds else None,
         "end_time_s": _r(float(t[-1]) if t.size else 0.0, 1),
     }
+    reasons = explain(run, events, crit, vmax, vdown, pmax, error)
     ds.attrs.update(title=f"flexlift ascent of {sc.name}, {run.mode} control", scenario=sc.name,
                     scenario_checksum=sc.checksum(), control=run.mode, events=json.dumps(events),
-                    criteria=json.dumps(crit), headline=json.dumps(headline), error=error or "",
+                    criteria=json.dumps(crit), reasons=json.dumps(reasons), headline=json.dumps(headline), error=error or "",
                     max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax)
+
+
+def _fault_before(events, time: float | None) -> str:
+    """The last fault event at or before ``time``, as "a sling_break of bag_2 at 1980 s; "."""
+    faults = [e for e in events if e["kind"] not in EVENT_KINDS.values()
+              and (time is None or e["time_s"] <= time + 1e-9)]
+    if not faults:
+        return ""
+    f = faults[-1]
+    what = f["kind"].replace("_", " ")
+    return f"{what} of {f['bag']} at {f['time_s']:.0f} s; " if f["bag"] else f"{what} at {f['time_s']:.0f} s; "
+
+
+def explain(run, events, crit, vmax: float, vdown: float, pmax: float, error) -> dict[str, str]:
+    """Each failed criterion's cause in one sentence: what happened, to which bag, when, the
+    value against its limit, and the fault that set it off (if any)."""
+    from flexlift.ascent.checks import breakout_check
+
+    sc, lim = run.scenario, run.scenario.limits
+
+    def first(kind):
+        return next((e for e in events if e["kind"] == kind), None)
+
+    out = {}
+    if not crit["ascent_velocity"]:
+        e = first("limit_ascent_velocity")
+        out["ascent_velocity"] = (
+            f"{_fault_before(events, e and e['time_s'])}{e['bag'] if e else 'a bag'} rose faster "
+            f"than {lim.ascent_velocity_m_s:g} m/s from {e['time_s']:.0f} s" if e else
+            f"the ascent reached {vmax:.2f} m/s") + f" (largest upward speed {vmax:.2f} m/s)"
+    if not crit["descent_velocity"]:
+        e = first("limit_descent_velocity")
+        settle = first("resettle")
+        text = (f"{_fault_before(events, e and e['time_s'])}the hull sank at up to {vdown:.2f} m/s "
+                f"(limit {lim.descent_velocity_m_s:g} m/s)")
+        if e:
+            text += f", {e['bag']} first over the limit at {e['time_s']:.0f} s"
+        if settle:
+            text += f", and resettled on the seabed at {settle['time_s']:.0f} s"
+        out["descent_velocity"] = text
+    if not crit["pitch"]:
+        e = first("limit_pitch")
+        out["pitch"] = (f"{_fault_before(events, e and e['time_s'])}the pitch passed "
+                        f"{lim.pitch_deg:g} deg" + (f" at {e['time_s']:.0f} s" if e else "")
+                        + f" (largest {np.degrees(pmax):.1f} deg)")
+    if not crit["no_surface_breach"]:
+        e = first("surface_breach")
+        out["no_surface_breach"] = (f"{_fault_before(events, e['time_s'])}{e['bag']} reached the "
+                                    f"surface at {e['time_s']:.0f} s; the run ends there")
+    if not crit["no_resettle"]:
+        e = first("resettle")
+        out["no_resettle"] = (f"{_fault_before(events, e['time_s'])}the hull touched the seabed "
+                              f"again at {e['time_s']:.0f} s")
+    if not crit["reached_target"]:
+        end = float(run.rec.t[max(int(run.rec.counts[0]) - 1, 0)])
+        if error:
+            out["reached_target"] = f"the run stopped at {end:.0f} s: {error}"
+        elif first("surface_breach"):
+            out["reached_target"] = "the run ended at the surface breach"
+        elif first("separation") is None:
+            out["reached_target"] = ("never separated in the "
+                                     f"{end:,.0f} s run: {breakout_check(sc, run.plant).message}")
+        else:
+            arrived = [e for e in events if e["kind"] == "arrival"]
+            out["reached_target"] = (
+                f"separated at {first('separation')['time_s']:.0f} s but "
+                + (f"only {len(arrived)} of the bags arrived within tolerance" if arrived else
+                   "no bag arrived within tolerance of the target")
+                + f" by the end of the {end:,.0f} s run"
+                + ("" if not arrived else
+                   f"; the target was not held for {run.X.hold_time:.0f} s"))
+    return out

@@ -19,7 +19,7 @@ import numpy as np
 
 # event codes written by the compiled loop (names in flexlift.ascent.events)
 (EV_SEPARATION, EV_BREAKOUT, EV_ARRIVAL, EV_TARGET_HELD, EV_SURFACE_BREACH, EV_LIMIT_VELOCITY,
- EV_LIMIT_PITCH, EV_LIFTOFF, EV_RESETTLE, EV_NUMERICS) = range(10)
+ EV_LIMIT_PITCH, EV_LIFTOFF, EV_RESETTLE, EV_NUMERICS, EV_LIMIT_DESCENT) = range(11)
 # why the compiled loop returned
 RET_DONE, RET_STOP, RET_NEED_U, RET_FULL = range(4)
 #: mechanical sub-steps per time step while the structure is on or near the seabed
@@ -39,7 +39,8 @@ class Settings(NamedTuple):
     target: float  # target height [m]
     tol: float  # arrival tolerance [m]
     hold_time: float  # the target held this long ends the run [s]
-    v_limit: float  # ascent velocity limit [m/s]
+    v_limit: float  # ascent velocity limit (upward) [m/s]
+    v_down_limit: float  # descent velocity limit (downward, once separated) [m/s]
     pitch_limit: float  # pitch limit [rad]
     top_limit: np.ndarray  # (nb,) a bag point above this breaches the surface [m]
     external: bool  # the supervisor is evaluated outside the compiled loop
@@ -82,9 +83,12 @@ class RunState(NamedTuple):
     gas_free: np.ndarray  # (nb,) gas filled, as free air [m^3]
     vented: np.ndarray  # (nb,) gas spilled, vented or leaked, at local pressure [m^3]
     purged: np.ndarray  # (nb,) gas purged, at local pressure [m^3]
+    vented_free: np.ndarray  # (nb,) the vented gas as free air at the surface [m^3]
+    purged_free: np.ndarray  # (nb,) the purged gas as free air [m^3]
     counters: np.ndarray  # int: [0] step k, [1] flags (see F_*)
-    scalars: np.ndarray  # float: [0] vmax, [1] pmax, [2] hold since (nan), [3] step of the
-    #                      cached implicit matrix (nan)
+    scalars: np.ndarray  # float: [0] largest upward speed, [1] largest pitch, [2] hold since
+    #                      (nan), [3] step of the cached implicit matrix (nan), [4] largest
+    #                      downward speed once separated
     # work arrays (no allocation per step)
     z: np.ndarray
     zd: np.ndarray
@@ -111,8 +115,8 @@ class RunState(NamedTuple):
 
 
 # flags in RunState.counters[1]
-F_HAVE_B, F_MATRIX, F_LIFTOFF, F_RESETTLE, F_OBSERVED, F_LIMIT_V, F_LIMIT_P, F_FRESH = (
-    1, 2, 4, 8, 16, 32, 64, 128)
+F_HAVE_B, F_MATRIX, F_LIFTOFF, F_RESETTLE, F_OBSERVED, F_LIMIT_V, F_LIMIT_P, F_FRESH, F_LIMIT_D = (
+    1, 2, 4, 8, 16, 32, 64, 128, 256)
 
 
 class Record(NamedTuple):
@@ -163,10 +167,14 @@ def new_switches(nb: int, ns: int) -> Switches:
 def new_run_state(nr: int, nb: int, ns: int, ng: int) -> RunState:
     """A zero state (the loop sets the initial gas, holding force and equilibrium)."""
     z = np.zeros
-    return RunState(z(nr), z(nr), z(nb), z(ng), np.zeros(ng, np.bool_), np.zeros(ng, np.bool_),
-                    np.full((2, ng), np.nan), z(ng), z(nr), z(nb), z(nb), np.full(nb, np.nan), z(nb), z(nb), z(nb), z(nb),
-                    z(nb), np.zeros(2, np.int64), np.array([0.0, 0.0, np.nan, np.nan]),
-                    z(nb), z(nb), z(nb), z(nb), z(ns), z(ns), z(ns), z(ns),
-                    np.zeros(ns, np.bool_), np.zeros(ns, np.bool_), z(nb), z(nr),
-                    z((nr, nr)), z((nr, nr)), z((nr, nr)), z((3, nb)), z((6, nr)), z(nb),
-                    z((2, nb)), z(ng), z(ng))
+    nan = np.nan
+    return RunState(
+        q=z(nr), v=z(nr), n=z(nb), H=z(ng), sep=z(ng, np.bool_), broken=z(ng, np.bool_),
+        release=np.full((2, ng), nan), H_rate=z(ng), b_prev=z(nr), fill=z(nb), opening=z(nb),
+        arrival=np.full(nb, nan), z_prev=z(nb), gas_local=z(nb), gas_free=z(nb), vented=z(nb),
+        purged=z(nb), vented_free=z(nb), purged_free=z(nb), counters=z(2, np.int64),
+        scalars=np.array([0.0, 0.0, nan, nan, 0.0]), z=z(nb), zd=z(nb), p=z(nb), V=z(nb),
+        w=z(ns), wv=z(ns), line=z(ns), contact=z(ns), active=z(ns, np.bool_),
+        last_active=z(ns, np.bool_), point=z(nb), b=z(nr), implicit=z((nr, nr)),
+        stiff=z((nr, nr)), damp=z((nr, nr)), meas=z((3, nb)), work=z((6, nr)), ndot=z(nb),
+        flow0=z((2, nb)), H_old=z(ng), gap=z(ng))

@@ -49,8 +49,12 @@ def _main(args: argparse.Namespace) -> int:
             f"{s['control']} control: separation at {s['separation_time_s']} s, breakout complete at "
             f"{s['breakout_time_s']} s, last arrival at {max(arr) if arr else None} s; "
             f"max ascent velocity {s['max_ascent_velocity_ms']} m/s, max pitch {s['max_pitch_deg']} deg, "
-            f"max bending moment {s['max_bending_moment_MNm']} MN m, gas {s['gas_used_free_air_m3']} m3 "
-            f"free air\ncriteria: {crit}\n")
+            f"max descent velocity {s['max_descent_velocity_ms']} m/s, "
+            f"max bending moment {s['max_bending_moment_MNm']} MN m, gas {s['gas_total_free_air_m3']} m3 "
+            f"free air in all ({s['gas_initial_free_air_m3']} initial fill + {s['gas_used_free_air_m3']} "
+            f"top-up)\ncriteria: {crit}\n")
+        for k, why in s["reasons"].items():
+            sys.stdout.write(f"  {k}: {why}\n")
     for w in out.warnings:
         sys.stderr.write(f"flexlift simulate: {w}\n")
     return 1 if out.warnings and s.get("error") else 0

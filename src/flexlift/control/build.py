@@ -8,6 +8,7 @@ import numpy as np
 
 from flexlift import constants as C
 from flexlift.control.controller import MODE_CODES, ControlArrays, ControlState, new_state
+from flexlift.control.profile import valve_profile
 from flexlift.errors import InputError
 from flexlift.fuzzy.tables import Table2D
 
@@ -38,6 +39,17 @@ def shaped_pull(total: float, x_bags, x_centroid: float) -> np.ndarray:
     A = np.vstack([np.ones(n), x])
     rhs = np.array([0.0, total * x_centroid - equal @ x])
     return equal + A.T @ np.linalg.solve(A @ A.T, rhs)
+
+
+def planned_profile(scenario, plant):
+    """The valve-limited planned ascent of ``plant``'s external bags (None: the trapezoid)."""
+    c, a = scenario.control, plant.arrays
+    bags = np.flatnonzero(plant.external)
+    if not bags.size:
+        return None
+    return valve_profile(c.target_height_m, c.ascent_speed_m_s, c.ascent_acceleration_m_s2,
+                         plant.neutral_volume[bags], a.capacity[bags], a.purge_max,
+                         c.purge_margin, a.water_depth, a.p_atm, a.rho_g)
 
 
 def supervisor_fis_of(scenario):
@@ -92,7 +104,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
     x = plant.x_point[bags]
     rho_g = a.rho_g
     pull = breakout_pull(scenario, float(a.H0.sum())) / rho_g  # [m^3]
-    if mode == "coordinated" and c.coordination.shape_breakout_pull and plant.kind == "coupled":
+    if mode in ("coordinated", "decentralized") and c.shape_breakout_pull and plant.kind == "coupled":
         xs = plant.strip_x
         hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * xs))
         V_pull = shaped_pull(pull, x, hold_centroid)
@@ -101,6 +113,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
     half = 0.5 * np.ptp(x) if x.size > 1 else 1.0
     s = c.supervisor
     values = table.values if table is not None else np.zeros((2, 2))
+    prof = planned_profile(scenario, plant)
     arrays = ControlArrays(
         mode=MODE_CODES[mode], bags=bags.astype(np.int64), period=1.0 / c.sample_rate_Hz,
         target=c.target_height_m, speed=c.ascent_speed_m_s, accel=c.ascent_acceleration_m_s2,
@@ -112,5 +125,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
         deadband=c.volume_deadband_m3, k_pitch=c.coordination.pitch_gain_m3_rad,
         k_pitch_rate=c.coordination.pitch_rate_gain_m3s_rad,
         k_height=c.height_integral_gain_m2_s, filter_time=c.measurement_filter_s,
+        ref_T=prof.duration if prof else 0.0, ref_z=prof.z if prof else np.zeros(2),
+        ref_v=prof.v if prof else np.zeros(2),
         table=np.ascontiguousarray(values), fill_v=fill_map.table.values)
     return arrays, new_state(bags.size)

@@ -8,7 +8,8 @@ per bag:
    ``filter_time``), so the retained flexible modes are not chased.
 2. **Reference** z_ref(t), ż_ref(t): the trapezoid of :mod:`flexlift.control.reference` from
    the height at separation (each bag's own in decentralized mode; the bags' mean in
-   coordinated mode) to the target.
+   coordinated mode) to the target, or where the purge valves could not keep up with the gas
+   expansion, the slower profile of :mod:`flexlift.control.profile`.
 3. **Supervisor**: normalised error e = (z_ref - z) / e_scale and rate r = (ż_ref - ż) / r_scale,
    saturated to [-1, 1], to u in [-1, 1] (the fuzzy map as a lookup table, or given from
    outside); desired volume V_d = V_neutral + I + u ΔV_max. I, the adapted neutral volume,
@@ -79,6 +80,9 @@ class ControlArrays(NamedTuple):
     k_pitch_rate: float  # [m^3 s/rad]
     k_height: float  # adaptation of the neutral volume per metre of error [m^3/(m s)]
     filter_time: float  # measurement low-pass time constant (0: none) [s]
+    ref_T: float  # duration of the valve-limited planned ascent (0: the plain trapezoid) [s]
+    ref_z: np.ndarray  # its height from 0 to the target, evenly over [0, ref_T] [m]
+    ref_v: np.ndarray  # its speed [m/s]
     table: np.ndarray  # (g, g) supervisor u on [-1, 1]^2
     fill_v: np.ndarray  # (m,) fill map: fill fraction (non-decreasing) at normalised distances
     #                     evenly over [0, 1] (0 below, 1 above)
@@ -141,7 +145,7 @@ def observe(t, z, zd, separated, C, S):
         if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
             S.z_ref[i], S.e_in[i], S.r_in[i] = 0.0, 0.0, 0.0
             continue
-        pos, vel = trapezoid(t - S.t_sep[i], C.target - S.z0[i], C.speed, C.accel)
+        pos, vel = reference(t - S.t_sep[i], C.target - S.z0[i], C)
         S.z_ref[i] = S.z0[i] + pos
         S.e_in[i] = min(max((S.z_ref[i] - S.z_f[i]) / C.e_scale, -1.0), 1.0)
         S.r_in[i] = min(max((vel - S.zd_f[i]) / C.r_scale, -1.0), 1.0)
@@ -149,6 +153,16 @@ def observe(t, z, zd, separated, C, S):
             lim = C.dV_max[i]
             S.adapt[i] = min(max(S.adapt[i] + C.period * C.k_height * (S.z_ref[i] - S.z_f[i]),
                                  -lim), lim)
+
+
+@jit
+def reference(tau, distance, C):
+    """(position [m], velocity [m/s]) along the planned ascent ``tau`` [s] after its start over
+    ``distance`` [m]: the trapezoid, or the valve-limited profile scaled to the distance."""
+    if C.ref_T <= 0.0:
+        return trapezoid(tau, distance, C.speed, C.accel)
+    k = distance / C.target
+    return (k * linear(C.ref_z, 0.0, C.ref_T, tau), k * linear(C.ref_v, 0.0, C.ref_T, tau))
 
 
 @jit

@@ -1,9 +1,10 @@
 """A balanced layout of the external bags (SPEC §3): the lift centroid on the centre of gravity
 of what the bags carry, and a small static bending moment.
 
-The load the external bags must balance is the plan's downward load (the breakout factor times
-the submerged weight, distributed like the mass, point masses included) less the internal
-bags' lift over their spans. With n equal bags:
+The load the external bags must balance is the submerged weight (distributed like the mass,
+point masses included) less the internal bags' lift over their spans: the state in which the
+bags hold the structure through the ascent, each external bag carrying an equal share. (The
+breakout pull on top of it is shaped like the suction by the controllers.) With n equal bags:
 
 1. **Equal shares.** The hull is cut into n segments that each carry 1/n of that load, and a
    bag goes to each segment's load centroid. The bags then close the force and the moment
@@ -77,21 +78,38 @@ def static_moment(x, q_down, points_down, bag_x, bag_lift):
     return shear_moment(x, -q_down, pts)
 
 
+#: the most bags whose positions :func:`refine` optimises (more: the equal-load centroids)
+MAX_REFINED = 60
+
+
+def moment_cost(x, M0, p, bag_lift: float) -> tuple[float, np.ndarray]:
+    """(mean square moment [N^2 m^2], its gradient in the bag positions ``p`` [N^2 m]) with
+    bags of ``bag_lift`` [N] at ``p`` added to ``M0``, the moment along ``x`` without them
+    (the bags' term of :func:`~flexlift.loads.strength.shear_moment`: F max(x - p, 0))."""
+    below = x[:, None] > p[None, :]
+    M = M0 + bag_lift * (below * (x[:, None] - p[None, :])).sum(axis=1)
+    return float(np.mean(M**2)), -2.0 * bag_lift * (below * M[:, None]).mean(axis=0)
+
+
 def refine(x, q, points, start: np.ndarray, bag_lift: float, x_target_moment: float,
            length: float) -> np.ndarray:
     """Positions minimising the mean square static moment (step 2), the bags' first moment
     kept at ``x_target_moment`` [N m] (their lift centroid on the centre of gravity)."""
+    if start.size > MAX_REFINED:
+        return start  # SLSQP's dense steps grow as n^3: the equal-load centroids stand
+    x = np.asarray(x, dtype=float)
+    _, M0 = static_moment(x, q, points, [], bag_lift)  # the moment without the bags
 
     def cost(p):
-        _, M = static_moment(x, q, points, p, bag_lift)
-        return float(np.mean(M**2))
+        return moment_cost(x, M0, p, bag_lift)[0]
 
     scale = cost(start) or 1.0
-    res = minimize(lambda p: cost(p) / scale, start, method="SLSQP",
+    res = minimize(lambda p: cost(p) / scale, start, jac=lambda p: moment_cost(x, M0, p, bag_lift)[1] / scale, method="SLSQP",
                    bounds=[(0.0, length)] * start.size,
                    constraints=[{"type": "eq",
                                  "fun": lambda p: (bag_lift * p.sum() - x_target_moment)
-                                 / (bag_lift * length)}],
+                                 / (bag_lift * length),
+                                 "jac": lambda p: np.ones_like(p) / length}],
                    options={"maxiter": 200, "ftol": 1e-10})
     p = np.sort(res.x) if res.success and cost(res.x) <= cost(start) else start
     return p

@@ -64,10 +64,21 @@ class LiftPlan:
     warnings: tuple[str, ...] = ()
     layout: str = "explicit"  # "balanced", "mode_nodes" or "explicit" (lift.bags)
 
+    def holding_lifts(self) -> np.ndarray:
+        """Each bag's lift while it holds the structure through the ascent [N] (SPEC §5): the
+        internal bags full, the external bags sharing the rest of the wet weight equally (their
+        rated lift when that is not possible, e.g. no external bag)."""
+        lifts = np.array([b.lift for b in self.bags])
+        ext = np.array([b.kind == "external" for b in self.bags])
+        rest = self.wet_weight - lifts[~ext].sum()
+        if ext.any() and rest > 0:
+            lifts = np.where(ext, rest / ext.sum(), lifts)
+        return lifts
+
     @property
     def lift_centroid(self) -> float:
-        """Where the bags' rated lift acts [m from the aft end]."""
-        lifts = np.array([b.lift for b in self.bags])
+        """Where the bags' lift acts while they hold the structure [m from the aft end]."""
+        lifts = self.holding_lifts()
         return float(lifts @ np.array([b.x for b in self.bags]) / lifts.sum())
 
     def lift_points(self) -> list[tuple[float, list[str]]]:
@@ -193,7 +204,9 @@ def _mode_layout(lift, modes: Modes | None, hull: Hull, n_ext: int, per: float, 
 
 def _balanced_layout(scenario, hull: Hull, n_ext: int, per: float, internal: list[Bag],
                      make) -> list[Bag]:
-    """``n_ext`` external bags balancing the hull (:mod:`flexlift.loads.balance`)."""
+    """``n_ext`` external bags balancing the hull (:mod:`flexlift.loads.balance`) in the state
+    they hold it through the ascent: the submerged weight less the internal bags' lift, shared
+    equally (the breakout pull on top is shaped like the suction by the controllers)."""
     if not n_ext:
         return []
     env = scenario.environment
@@ -202,12 +215,12 @@ def _balanced_layout(scenario, hull: Hull, n_ext: int, per: float, internal: lis
     lifts = [b.lift for b in internal]
     x, q, points = balance.design_load(
         hull, submerged_weight(hull.mass_per_length, g, rho, rho_s),
-        submerged_weight(hull.point_masses, g, rho, rho_s), spans, lifts,
-        scenario.lift.breakout_factor)
+        submerged_weight(hull.point_masses, g, rho, rho_s), spans, lifts, 1.0)
     start = balance.equal_share_positions(x, q, points, n_ext)
     load = np.trapezoid(q, x) + sum(F for _, F in points)
     moment = np.trapezoid(q * x, x) + sum(F * xp for xp, F in points)
-    pos = balance.refine(x, q, points, start, per, per * n_ext * moment / load, hull.length)
+    share = load / n_ext  # what each external bag holds through the ascent [N]
+    pos = balance.refine(x, q, points, start, share, moment, hull.length)
     diameter = float(sphere_diameter(per / (rho * g)))
     bags, k = [], 0
     for xp, count in balance.clusters(pos, diameter):

@@ -89,6 +89,28 @@ def _criteria(criteria: dict[str, bool]) -> str:
     return f"<table><thead><tr><th>criterion</th><th>result</th></tr></thead><tbody>{rows}</tbody></table>"
 
 
+def _faults(scenario) -> str:
+    """The scenario's faults, one phrase each ("none" when the run is fault-free)."""
+    parts = []
+    for f in scenario.faults:
+        extra = {k: v for k, v in f.model_dump().items() if k not in ("kind", "bag", "time_s")}
+        more = ", ".join(f"{k} {v:g}" for k, v in extra.items() if isinstance(v, (int, float)))
+        parts.append(f"{f.kind.replace('_', ' ')} of {f.bag} at {f.time_s:g} s"
+                     + (f" ({more})" if more else ""))
+    return "; ".join(parts) or "none"
+
+
+def _disturbances(d) -> str:
+    """The environmental disturbances of the run ("none" when calm)."""
+    parts = []
+    if d.current_m_s:
+        parts.append(f"vertical current {d.current_m_s:+g} m/s (positive up)")
+    if d.force_noise_N_m:
+        parts.append(f"random line load, std {d.force_noise_N_m:g} N/m, correlation time "
+                     f"{d.noise_time_s:g} s, seed {d.seed}")
+    return "; ".join(parts) or "none"
+
+
 def _particulars(scenario) -> str:
     h, env, c = scenario.hull, scenario.environment, scenario.control
     mass = f"{h.displacement_t:g} t" if h.displacement_t is not None else "per element (see scenario)"
@@ -104,14 +126,18 @@ def _particulars(scenario) -> str:
         ("Target height above the seabed", f"{c.target_height_m:g} m"),
         ("Planned ascent speed", f"{c.ascent_speed_m_s:g} m/s"),
         ("Limits", f"ascent < {scenario.limits.ascent_velocity_m_s:g} m/s, "
+                   f"descent < {scenario.limits.descent_velocity_m_s:g} m/s, "
                    f"pitch < {scenario.limits.pitch_deg:g}°, no surface breach"),
+        ("Faults", _faults(scenario)),
+        ("Disturbances", _disturbances(scenario.disturbance)),
     ]
     body = "".join(f"<tr><td>{_e(a)}</td><td>{_e(b)}</td></tr>" for a, b in rows)
     return f"<table><tbody>{body}</tbody></table>"
 
 
-def _verdict(lift: dict, checks: dict, warnings: list) -> str:
-    """The verdict box: the lift criteria decide; the numerical checks and warnings count."""
+def _verdict(lift: dict, checks: dict, warnings: list, reasons: dict | None = None) -> str:
+    """The verdict box: the lift criteria decide; the numerical checks and warnings count;
+    each failed lift criterion with its cause (``reasons``: "mode: criterion" -> sentence)."""
     failed = [k for k, v in {**lift, **checks}.items() if not v]
     if not lift:
         return ('<div class="verdict bad">The ascent was not simulated, so the lift criteria '
@@ -123,7 +149,9 @@ def _verdict(lift: dict, checks: dict, warnings: list) -> str:
         "all criteria passed")
     if warnings:
         text += f"; {len(warnings)} warning(s)"
-    return f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.</div>'
+    causes = "".join(f"<li><b>{_e(k)}</b>: {_e(r)}</li>" for k, r in (reasons or {}).items())
+    causes = f"<ul>{causes}</ul>" if causes else ""
+    return f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.{causes}</div>'
 
 
 def _stage_sections(stages: list[StageOutput]) -> list[str]:
@@ -160,6 +188,8 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
             if s.name.startswith("simulate:") for k, v in s.criteria.items()}
     checks = {f"{s.name}: {k}": v for s in stages
               if not s.name.startswith("simulate:") for k, v in s.criteria.items()}
+    reasons = {f"{s.name.split(':', 1)[1]}: {k}": r for s in stages
+               if s.name.startswith("simulate:") for k, r in s.summary.get("reasons", {}).items()}
     warnings = [(s.name, w) for s in stages for w in s.warnings]
     headline = next((s.tables[0] for s in stages if s.name == "compare" and s.tables), None)
     if headline is None:
@@ -173,7 +203,7 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         f"<p>{_e(scenario.description)}</p>" if scenario.description else "",
         f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
         f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC</p>",
-        _verdict(lift, checks, warnings),
+        _verdict(lift, checks, warnings, reasons),
         _table(headline) if headline is not None else "",
         f"<nav><ul>{nav}</ul></nav>",
         '<h2 id="particulars">Particulars</h2>',

@@ -275,7 +275,6 @@ class Coordination(_Section):
 
     pitch_gain_m3_rad: real(0, 1.0e8) = 200.0
     pitch_rate_gain_m3s_rad: real(0, 1.0e8) = 2000.0
-    shape_breakout_pull: Flag = True
 
 
 ControlMode = Literal["decentralized", "coordinated", "paper", "open-loop"]
@@ -292,6 +291,9 @@ class Control(_Section):
     # extra buoyancy held until the hull lifts off; default (null) 18 % of the suction H_0,
     # the tanker's 150 t of 835 t: it breaks out in T_b (1/0.18 - 1) = 4.6 T_b plus the fill
     breakout_pull_t: real(0, MAX_MASS_T) | None = None
+    # the pull split over the bags so its resultant sits on the suction's centroid (a plan made
+    # before the lift, no communication): the hull separates level; false: equal shares
+    shape_breakout_pull: Flag = True
     purge_margin: real(0.05, 1) = 0.7  # eta: the planned speed keeps the purge this far below capacity
     volume_deadband_m3: real(0, 10_000) = 0.2  # |V_d - V| below this: neither fill nor purge
     height_integral_gain_m2_s: real(0, 100) = 0.05  # neutral volume adapted per m of error [m^3/(m s)]

@@ -7,13 +7,17 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
+import numpy as np
+
 from flexlift import constants as C
+from flexlift.ascent.checks import plan_checks, refuse_unworkable
+from flexlift.ascent.plant import coupled_plant
+from flexlift.ascent.result import section_modulus
 from flexlift.loads.liftplan import LiftPlan, plan_lift
 from flexlift.loads.strength import Strength, lift_load_case, strength
 from flexlift.output.files import write_text
 from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.structure.hull import hull_from_scenario
-from flexlift.structure.modes import compute_modes
 
 log = logging.getLogger(__name__)
 NAME = "loads"
@@ -21,6 +25,16 @@ NAME = "loads"
 
 def _extreme(e, scale: float) -> dict:
     return {"value": e.value / scale, "x_m": e.x, "node": e.node}
+
+
+def stress_of(scenario, st: Strength) -> dict:
+    """Hull girder bending stress sigma = |M| / Z under the plan and its utilisation."""
+    Z = section_modulus(scenario, st.x)
+    sigma = np.abs(st.M) / Z
+    k = int(np.argmax(sigma))
+    allow = scenario.hull.allowable_stress_MPa
+    return {"max_MPa": float(sigma[k] / 1e6), "x_m": float(st.x[k]),
+            "allowable_MPa": allow, "max_utilisation": float(sigma[k] / 1e6 / allow)}
 
 
 def summary_of(plan: LiftPlan, hull, st: Strength, layout: str) -> dict:
@@ -60,6 +74,8 @@ def summary_of(plan: LiftPlan, hull, st: Strength, layout: str) -> dict:
         "closing_shear_MN": st.closing_shear / 1e6,
         "closing_moment_MNm": st.closing_moment / 1e6,
         "samples": int(st.x.size),
+        "lift_centroid_m": plan.lift_centroid,
+        "lift_points": [{"x_m": x, "bags": names} for x, names in plan.lift_points()],
         "warnings": list(plan.warnings),
     }
 
@@ -107,25 +123,46 @@ def _tables(summary: dict) -> list[Table]:
     return [bags, st]
 
 
+def _check_table(checks) -> Table:
+    return Table("Checks before the run", ["check", "result", "finding"],
+                 [[c.name, "ok" if c.ok else "WARNING", c.message] for c in checks],
+                 note="Each warning says the numbers and the fix; a plan that cannot work at all "
+                      "is refused before the run.")
+
+
+def _layout_text(scenario, plan) -> str:
+    lift = scenario.lift
+    if lift.bags is not None:
+        return "explicit layout (lift.bags)"
+    if not plan.external:
+        return "internal bags only"
+    if plan.layout == "mode_nodes":
+        return f"external bags at the nodes of flexible mode {lift.layout_flexible_mode}"
+    return (f"external bags balanced on the centre of gravity at {len(plan.lift_points())} lift "
+            "points")
+
+
 def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> StageOutput:
     """Lift plan and strength of ``scenario``; figures and CSV tables under ``out`` when given.
 
     per_element : sample intervals per element for V and M (plus the load discontinuities)
     """
     hull = hull_from_scenario(scenario)
-    plan = plan_lift(scenario, hull, compute_modes(hull))
+    plan = plan_lift(scenario, hull)
     case = lift_load_case(plan, hull)
     st = strength(case, hull, per_element)
-    lift = scenario.lift
-    layout = (
-        "explicit layout (lift.bags)"
-        if lift.bags is not None
-        else f"external bags at the nodes of flexible mode {lift.layout_flexible_mode}"
-        if plan.external
-        else "internal bags only"
-    )
-    summary = summary_of(plan, hull, st, layout)
-    tables = _tables(summary)
+    summary = summary_of(plan, hull, st, _layout_text(scenario, plan))
+    plant = coupled_plant(scenario, hull, plan)
+    refuse_unworkable(scenario, plant)
+    checks = plan_checks(scenario, plant)
+    summary["checks"] = {c.name: {"ok": c.ok, "message": c.message} for c in checks}
+    summary["static_stress"] = stress_of(scenario, st)
+    warnings = list(plan.warnings) + [f"{c.name}: {c.message}" for c in checks if not c.ok]
+    tables = _tables(summary) + [_check_table(checks)]
+    s_ = summary["static_stress"]
+    tables[1].rows.append(["max bending stress |M|/Z", s_["max_MPa"], "MPa", s_["x_m"], None])
+    tables[1].rows.append(["utilisation (allowable "
+                           f"{s_['allowable_MPa']:g} MPa)", s_["max_utilisation"], "-", s_["x_m"], None])
     figures: list[Figure] = []
     if out is not None:
         from flexlift.output.plots._style import save
@@ -149,6 +186,7 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
         )
         write_text(tdir / "loads_bags.csv", tables[0].to_csv())
         write_text(tdir / "loads_strength.csv", tables[1].to_csv())
-    return StageOutput(
-        name=NAME, summary=summary, figures=figures, tables=tables, warnings=list(plan.warnings)
-    )
+        write_text(tdir / "loads_checks.csv", tables[2].to_csv())
+    criteria = {"static_stress_within_allowable": summary["static_stress"]["max_utilisation"] <= 1.0}
+    return StageOutput(name=NAME, summary=summary, figures=figures, tables=tables,
+                       warnings=warnings, criteria=criteria)

@@ -7,6 +7,8 @@ from __future__ import annotations
 import typing
 from pathlib import Path
 
+import numpy as np
+
 from flexlift.errors import SimulationError
 from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.scenario import ControlMode
@@ -35,6 +37,34 @@ def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
     return figs
 
 
+def gas_budget_rows(s: dict) -> list[list]:
+    """The whole gas budget of a run summary, free air at the surface [m^3], row by row."""
+    return [["initial fill to the neutral volumes, before the run [m3]", s["gas_initial_free_air_m3"]],
+            ["top-up during the run [m3]", s["gas_used_free_air_m3"]],
+            ["in all [m3]", s["gas_total_free_air_m3"]],
+            ["vented: spill, relief and leaks [m3]", s["gas_vented_free_air_m3"]],
+            ["purged by the controllers [m3]", s["gas_purged_free_air_m3"]],
+            ["supply time at the fill rate, one bag after another [h]", s["supply_bag_hours"]]]
+
+
+def gas_table(s: dict, mode: str) -> Table:
+    return Table(f"Gas budget ({mode}), as free air at the surface (at local pressure in the "
+                 "netCDF)", ["quantity", "value"], gas_budget_rows(s))
+
+
+def stress_table(result, scenario, mode: str) -> Table:
+    """Where the hull girder stress envelope peaks, against the allowable stress."""
+    ds = result.dataset
+    k = int(np.argmax(ds["utilisation_max"].values))
+    x = float(ds["x"][k])
+    return Table(f"Hull girder stress over the ascent ({mode})",
+                 ["quantity", "value"],
+                 [["largest bending stress |M| / Z [MPa]", round(float(ds["stress_max"][k]) / 1e6, 1)],
+                  ["at x from the aft end [m]", round(x, 1)],
+                  ["allowable stress [MPa]", scenario.hull.allowable_stress_MPa],
+                  ["utilisation", round(float(ds["utilisation_max"][k]), 3)]])
+
+
 def run_stage(scenario, out: Path | None, control: str | None = None,
               duration: float | None = None, progress=None, engine="table",
               primary: bool | None = None) -> StageOutput:
@@ -58,7 +88,10 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
     figures = _write(result, Path(out), mode, primary) if out is not None else []
     summary = result.summary()
     rows = [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")] for e in result.events]
-    tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"], rows)]
+    tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"], rows),
+              gas_table(summary, mode)]
+    if summary["max_stress_MPa"] is not None:
+        tables.append(stress_table(result, scenario, mode))
     return StageOutput(name=f"simulate:{mode}", summary=summary, figures=figures, tables=tables,
                        warnings=warnings, criteria=result.criteria)
 
@@ -71,12 +104,15 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
 
     modes = [o.name.split(":", 1)[1] for o in outputs]
     rows = [[m, o.summary["max_pitch_deg"], o.summary["max_ascent_velocity_ms"],
-             o.summary["arrival_spread_s"], o.summary["max_bending_moment_MNm"],
-             o.summary["gas_used_free_air_m3"], all(o.criteria.values())]
+             o.summary["max_descent_velocity_ms"], o.summary["arrival_spread_s"],
+             o.summary["max_bending_moment_MNm"], o.summary["max_utilisation"],
+             o.summary["gas_total_free_air_m3"], all(o.criteria.values())]
             for m, o in zip(modes, outputs)]
     table = Table("Control modes compared",
-                  ["control", "max pitch [deg]", "max ascent velocity [m/s]", "arrival spread [s]",
-                   "max bending moment [MN m]", "gas used, free air [m3]", "all criteria"], rows)
+                  ["control", "max pitch [deg]", "max ascent velocity [m/s]",
+                   "max descent velocity [m/s]", "arrival spread [s]", "max bending moment [MN m]",
+                   "max stress utilisation", "gas in all (initial fill + top-up), free air [m3]",
+                   "all criteria"], rows)
     figures = []
     if out is not None:
         results = [load_netcdf(Path(out) / "data" / f"simulate_{m}.nc") for m in modes]

@@ -1,0 +1,148 @@
+"""Checks of a lift plan before the run (SPEC §3, §5-7): each says what it found, with the
+numbers and the fix.
+
+A *refusal* means the plan cannot work at all (the run would only fail): :func:`refuse_unworkable`
+raises :class:`~flexlift.errors.InputError` with one line, and :func:`~flexlift.ascent.simulate`
+calls it. The others are warnings, shown by ``flexlift loads`` and in the report:
+
+- balance: the lift centroid against the centre of gravity, and the static pitch moment;
+- breakout: the pull against the suction H_0 and the separation time it implies (SPEC §6)
+  against the run's duration;
+- purge capacity: from which height up the planned speed cannot be held by purging (the
+  planned ascent slows there, :mod:`flexlift.control.profile`);
+- fill: the time the supply takes to fill the breakout pull;
+- hull girder stress under the plan: sigma = M / Z against the allowable stress.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.control.build import breakout_pull
+from flexlift.control.profile import speed_limit
+from flexlift.errors import InputError
+from flexlift.physics import seabed
+
+
+@dataclass(frozen=True)
+class Check:
+    """One check of the plan: ``ok`` or not, and a one-line ``message`` (numbers and fix)."""
+
+    name: str
+    ok: bool
+    message: str
+
+
+def _t(force: float, g: float) -> float:
+    return force / (C.TONNE * g)
+
+
+def refuse_unworkable(scenario, plant) -> None:
+    """InputError (one line) for a plan that cannot work: the target above where the bags
+    reach the surface, no breakout pull, or closed bags relieving above their working pressure."""
+    env, lim, c = scenario.environment, scenario.limits, scenario.control
+    top = float(plant.arrays.top_offset.max())
+    highest = env.water_depth_m - lim.surface_clearance_m - top
+    if c.target_height_m >= highest:
+        raise InputError(
+            "control.target_height_m", c.target_height_m,
+            f"the bags' tops ({top:.1f} m above the hull bottom) reach the surface when the hull "
+            f"is {highest:.1f} m above the seabed in {env.water_depth_m:g} m of water; choose a "
+            f"target below {highest:.1f} m")
+    H0 = float(plant.arrays.H0.sum())
+    if H0 > 0 and breakout_pull(scenario, H0) <= 0:
+        raise InputError("control.breakout_pull_t", c.breakout_pull_t,
+                         f"with no pull the hull never separates from its {_t(H0, plant.gravity):.0f} t "
+                         "of suction; give a positive pull (default: 18 % of the suction)")
+    relief, work = scenario.gas.relief_pressure_bar, scenario.lift.catalogue_bag.working_pressure_bar
+    if (~plant.external).any() and relief > work:
+        raise InputError("gas.relief_pressure_bar", relief,
+                         f"the closed (internal) bags would hold more over-pressure than their "
+                         f"{work:g} bar working pressure; set the relief at or below it")
+
+
+def plan_checks(scenario, plant) -> list[Check]:
+    """Every warning-level check of ``plant``'s lift plan (module docstring)."""
+    return [balance_check(plant), breakout_check(scenario, plant),
+            purge_check(scenario, plant), fill_check(scenario, plant)]
+
+
+def balance_check(plant) -> Check:
+    """The bags' rated lift centroid against the centre of gravity of the wet weight."""
+    hull, plan = plant.hull, plant.plan
+    x_e = 0.5 * (hull.x_nodes[1:] + hull.x_nodes[:-1])
+    masses = np.concatenate([hull.mass_per_length * hull.element_length, hull.point_masses])
+    xs = np.concatenate([x_e, hull.x_nodes])
+    cg = float(masses @ xs / masses.sum())
+    e = plan.lift_centroid - cg
+    moment = float(plan.holding_lifts().sum()) * e
+    ok = abs(e) <= 0.01 * hull.length
+    msg = (f"lift centroid {plan.lift_centroid:.2f} m from the aft end, centre of gravity "
+           f"{cg:.2f} m: {e:+.2f} m ({100 * e / hull.length:+.2f} % of L), a static pitch moment "
+           f"of {moment / 1e6:.1f} MN m")
+    if not ok:
+        msg += "; balance the bags (lift.layout: balanced) or move them"
+    return Check("balance", ok, msg)
+
+
+def breakout_check(scenario, plant) -> Check:
+    """Whether the pull breaks the suction within the run (SPEC §6 and the fill)."""
+    a, g = plant.arrays, plant.gravity
+    H0 = float(a.H0.sum())
+    if H0 <= 0:
+        return Check("breakout", True, "no suction (breakout factor 1): the hull lifts as soon as it is light")
+    pull = breakout_pull(scenario, H0)
+    n_ext = int(plant.external.sum())
+    fill = pull / a.rho_g / max(n_ext * scenario.gas.fill_rate_max_m3_s, 1e-12)
+    t_sep = seabed.separation_time(pull, H0, scenario.seabed.breakout_time_s) + fill
+    duration = scenario.simulation.duration_s
+    ok = t_sep < 0.8 * duration
+    msg = (f"a pull of {_t(pull, g):.0f} t breaks the {_t(H0, g):.0f} t hold in ~{t_sep:,.0f} s "
+           f"({fill:.0f} s of it filling the pull), {'within' if ok else 'too close to or beyond'} "
+           f"the {duration:,.0f} s run")
+    if not ok:
+        need = H0 / (1.0 + max(0.8 * duration - fill, 1.0) / scenario.seabed.breakout_time_s)
+        msg += (f"; raise control.breakout_pull_t to at least {_t(need, g):.0f} t or "
+                "simulation.duration_s")
+    return Check("breakout", ok, msg)
+
+
+def purge_check(scenario, plant) -> Check:
+    """From which height up the planned speed cannot be held by purging."""
+    a, c = plant.arrays, scenario.control
+    ext = np.flatnonzero(plant.external)
+    z = np.linspace(0.0, c.target_height_m, 2001)
+    lim = np.min([speed_limit(z, plant.neutral_volume[i], a.capacity[i], a.purge_max,
+                              c.purge_margin, a.water_depth, a.p_atm, a.rho_g) for i in ext], axis=0)
+    slow = lim < c.ascent_speed_m_s
+    if not slow.any():
+        return Check("purge_capacity", True,
+                     f"the purge valves keep up with the gas expansion at the planned "
+                     f"{c.ascent_speed_m_s:g} m/s all the way to the target "
+                     f"(at least {lim.min():.2f} m/s with margin {c.purge_margin:g})")
+    z0 = float(z[slow][0])
+    return Check("purge_capacity", False,
+                 f"from {z0:.1f} m above the seabed ({a.water_depth - z0:.1f} m deep) up, the gas "
+                 f"expands faster than {c.purge_margin:g} of the purge capacity at the planned "
+                 f"{c.ascent_speed_m_s:g} m/s: the planned ascent slows to {lim[slow].min():.3f} m/s "
+                 "there (larger purge valves, gas.purge_rate_max_m3_s, would keep the speed)")
+
+
+def fill_check(scenario, plant) -> Check:
+    """How long the supply takes to fill the breakout pull."""
+    a = plant.arrays
+    n_ext = int(plant.external.sum())
+    pull = breakout_pull(scenario, float(a.H0.sum())) / a.rho_g  # [m^3] at local pressure
+    t_fill = pull / max(n_ext * scenario.gas.fill_rate_max_m3_s, 1e-12)
+    V_n = plant.neutral_volume[plant.external]
+    t_first = float(V_n.max()) / scenario.gas.fill_rate_max_m3_s
+    ok = t_fill < 0.1 * scenario.simulation.duration_s
+    msg = (f"the supply ({scenario.gas.fill_rate_max_m3_s:g} m3/s per bag) fills the "
+           f"{pull:.0f} m3 pull in {t_fill:.0f} s; the initial fill to the neutral volume took "
+           f"{t_first / 60:.0f} min per bag")
+    if not ok:
+        msg += "; raise gas.fill_rate_max_m3_s"
+    return Check("fill", ok, msg)

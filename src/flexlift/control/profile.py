@@ -1,0 +1,71 @@
+"""The planned ascent that respects the purge valves (SPEC §5, §7).
+
+A bag of gas volume V at pressure p rising at speed v expands at V rho g v / p (Boyle); the
+purge can take off at most Q_out,max sqrt(V / V_max) of it. Where the planned speed would need
+more, it cannot be held by purging and the ascent runs away, so the plan slows below
+
+    v_max(z) = eta Q_out,max sqrt(V / V_max) p(z) / (rho g V)
+
+(``control.purge_margin`` eta < 1) for the tightest external bag, V its neutral (working)
+volume. The fastest profile under that limit, the planned speed and the acceleration limit
+(up and down) is a forward-backward pass over the height; it is sampled in time for the
+compiled controller. When the limit never binds (the tanker from 350 m to 50 m depth) the plain
+trapezoid of :mod:`flexlift.control.reference` is used unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexlift.physics.gas import ambient_pressure, expansion_rate, purge_flow
+
+#: height samples of the forward-backward pass and time samples of the table
+HEIGHTS, TIMES = 4001, 4001
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A planned ascent from the seabed (0) to ``target`` [m]: ``z``, ``v`` [m, m/s] evenly
+    over [0, ``duration``] [s]; ``limit_from`` [m] is the height above which the valves'
+    limit binds (None: it never does)."""
+
+    duration: float
+    z: np.ndarray
+    v: np.ndarray
+    limit_from: float | None
+
+
+def speed_limit(z, V, capacity, purge_max, eta, water_depth, p_atm, rho_g):
+    """v_max(z) [m/s] of a bag with gas volume ``V`` [m^3] (of ``capacity``) at heights ``z``
+    [m]: the speed at which its expansion takes ``eta`` of the purge capacity."""
+    p = ambient_pressure(np.asarray(z, dtype=float), water_depth, p_atm, rho_g)
+    q = eta * purge_flow(1.0, V, capacity, purge_max)
+    return q / expansion_rate(V, p, rho_g, 1.0)
+
+
+def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth, p_atm,
+                  rho_g) -> Profile | None:
+    """The fastest ascent to ``target`` [m] within ``speed`` [m/s], ``accel`` [m/s^2] and
+    the tightest bag's :func:`speed_limit` (``V``, ``capacity``: arrays over the bags); None
+    when the limit never binds."""
+    z = np.linspace(0.0, target, HEIGHTS)
+    lim = np.min([speed_limit(z, v, c, purge_max, eta, water_depth, p_atm, rho_g)
+                  for v, c in zip(np.atleast_1d(V), np.atleast_1d(capacity))], axis=0)
+    if np.all(lim >= speed):
+        return None
+    cap = np.minimum(lim, speed)
+    dz = z[1] - z[0]
+    v = cap.copy()
+    v[0] = 0.0
+    for i in range(1, z.size):  # accelerating from rest
+        v[i] = min(v[i], np.sqrt(v[i - 1] ** 2 + 2.0 * accel * dz))
+    v[-1] = 0.0
+    for i in range(z.size - 2, -1, -1):  # decelerating to rest at the target
+        v[i] = min(v[i], np.sqrt(v[i + 1] ** 2 + 2.0 * accel * dz))
+    tau = np.concatenate([[0.0], np.cumsum(2.0 * dz / np.maximum(v[1:] + v[:-1], 1e-12))])
+    t = np.linspace(0.0, tau[-1], TIMES)
+    binding = z[lim < speed]
+    return Profile(float(tau[-1]), np.interp(t, tau, z), np.interp(t, tau, v),
+                   float(binding.min()) if binding.size else None)
