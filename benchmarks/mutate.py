@@ -1,0 +1,388 @@
+"""The mutation check: change one physical, control or integration term, and the tests must fail.
+
+``./dev mutate`` (or ``python benchmarks/mutate.py``) runs every mutation of :data:`MUTATIONS`
+on a fresh copy of ``src/`` and ``tests/`` in a temporary folder: the copy's ``src`` is put
+first on ``PYTHONPATH`` (checked: ``flexlift.__file__`` must be the copy's), numba's cache goes
+to the copy's own folder (``NUMBA_CACHE_DIR``: mutants never read or pollute each other's or the
+checkout's compiled code; each recompiles the loop, ~40-60 s), and :data:`TESTS` run with
+``pytest -x``. A mutant is *killed* when the tests fail, *survived* when they pass, *timeout*
+(counted as killed: the suite did not pass) when they hang past the limit, and *error* when
+the mutation could not be applied or pytest itself broke (not counted as killed).
+
+Why not mutmut: it mutates every operator it finds (thousands of mutants, most in glue code),
+and each mutant of a compiled module costs a full numba compile, so a run would take days on
+two cores; a short list of hand-written mutations, each one wrong term of a law, says more
+about the suite per minute and reads as a list of the laws it guards.
+
+The unmutated copy runs first (it must pass; its time sets the timeout). Results: a table on
+stdout and ``benchmarks/mutation.json`` (each mutation, outcome, seconds, the first failing
+test, and the score). Options: ``--only NAME ...``, ``--list``, ``--tests FILE ...`` (another
+test subset, e.g. to see what the suite without a file kills), ``--json PATH``, ``--keep``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+#: the tests each mutant runs, fastest to fail first (pytest -x stops at the first failure)
+TESTS = ("tests/test_physics.py", "tests/test_controller.py", "tests/test_control_laws.py",
+         "tests/test_plant_laws.py", "tests/test_results.py", "tests/test_simulate.py")
+
+
+@dataclass(frozen=True)
+class Mutation:
+    """One wrong term: in ``file`` (under src/flexlift/), ``original`` (occurring exactly once)
+    becomes ``replacement``."""
+
+    name: str
+    file: str
+    original: str
+    replacement: str
+    description: str
+
+
+M = Mutation
+MUTATIONS = (
+    # ------------------------------------------------------------------ the laws themselves
+    M("purge-orifice-law", "physics/gas.py",
+      "purge_max * np.sqrt(frac)", "purge_max * frac",
+      "purge orifice flow proportional to V/V_max instead of sqrt(V/V_max)"),
+    M("gauge-pressure", "physics/gas.py",
+      "return p_atm + rho_g * np.maximum(water_depth - height, 0.0)",
+      "return rho_g * np.maximum(water_depth - height, 0.0)",
+      "Boyle on gauge pressure: the ambient pressure without p_atm"),
+    M("relief-law", "physics/gas.py",
+      "np.maximum(n - (pressure + relief) * capacity / RT, 0.0)",
+      "np.maximum(n - pressure * capacity / RT, 0.0)",
+      "the venting law ignores the relief setting"),
+    M("holding-rate-saturation", "physics/seabed.py",
+      "pull = np.minimum(np.maximum(uplift, 0.0) / np.maximum(H0, 1e-300), 1.0)",
+      "pull = np.maximum(uplift, 0.0) / np.maximum(H0, 1e-300)",
+      "holding decay without the min(U/H0, 1) saturation"),
+    M("release-euler", "physics/seabed.py",
+      "return H * np.exp(-dt / release_time)", "return H * (1.0 - dt / release_time)",
+      "released suction by an Euler step instead of the exact exponential"),
+    M("contact-pulls", "physics/seabed.py",
+      "q * np.logical_or(bilateral, (w < 0.0) & (q > 0.0))",
+      "q * np.logical_or(bilateral, w < 0.0)",
+      "the one-sided seabed pulls a strip lifting off fast"),
+    M("breakout-threshold", "physics/seabed.py",
+      "COMPLETE_FRACTION = 1e-3", "COMPLETE_FRACTION = 1e-2",
+      "breakout complete at 1 % of H0 instead of 0.1 %"),
+    M("added-mass-law", "physics/hydro.py",
+      "ca * rho * math.pi * breadth**2 / 4.0", "ca * rho * math.pi * breadth**2",
+      "added mass C_a rho pi B^2 (the /4 lost)"),
+    M("drag-law-abs", "physics/hydro.py",
+      "return -coeff * np.abs(v) * v", "return -coeff * v * v",
+      "drag -c v^2: pushes down on a sinking body"),
+    M("submerged-weight-law", "physics/hydro.py",
+      "return mass * g * (1.0 - rho_water / rho_structure)", "return mass * g",
+      "submerged weight without the steel's own buoyancy"),
+    # ------------------------------------------------------------------ the assembled plant
+    M("hull-drag-breadth", "ascent/plant.py",
+      "hydro.drag_coefficient(rho, hy.drag_coefficient, hull.breadth)",
+      "hydro.drag_coefficient(rho, hy.drag_coefficient, hull.depth)",
+      "hull strip drag on the depth instead of the breadth"),
+    M("bag-drag-coefficient", "ascent/plant.py",
+      "rho, hy.bag_drag_coefficient, 1.0)", "rho, hy.drag_coefficient, 1.0)",
+      "bag drag with the hull's C_D (1.2) instead of C_D,bag (1.0)"),
+    M("added-mass-plant", "ascent/plant.py",
+      "mass_line = (hydro.added_mass_per_length(",
+      "mass_line = (0.0 * hydro.added_mass_per_length(",
+      "the simulation's modes without the added mass (dry)"),
+    M("modal-damping", "ascent/plant.py",
+      "damping=2.0 * scenario.hull.modal_damping * modes.omega[:nr]",
+      "damping=scenario.hull.modal_damping * modes.omega[:nr]",
+      "modal damping zeta omega instead of 2 zeta omega"),
+    M("dry-weight-plant", "ascent/plant.py",
+      "strip_gen @ hydro.submerged_weight(hull.mass_per_length[el], g, rho, rho_s)",
+      "strip_gen @ (hull.mass_per_length[el] * g)",
+      "the simulated hull carries its dry weight (steel buoyancy lost)"),
+    M("open-bag-relief", "ascent/plant.py",
+      "relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)",
+      "relief = np.full(nb, scenario.gas.relief_pressure_bar * C.BAR)",
+      "open (parachute) bags hold over-pressure: no spill at capacity"),
+    M("paper-tributary-load", "ascent/paper.py",
+      "strip_force=force * trib[None, :]", "strip_force=force.copy()",
+      "the paper's bags feel one metre of hull drag and contact, not their tributary length"),
+    M("paper-weight-share", "ascent/paper.py",
+      "W = net_weight * trib / L", "W = net_weight * np.full(ne, 1.0 / ne)",
+      "the paper's bags carry equal shares of the wet weight, not tributary shares"),
+    # ------------------------------------------------------------------ loads in the loop
+    M("hull-drag-sign", "ascent/mechanics.py",
+      "drag(wv[s] - current, A.strip_drag[s])", "drag(current - wv[s], A.strip_drag[s])",
+      "hull drag along the relative motion instead of against it"),
+    M("bag-drag-sign", "ascent/mechanics.py",
+      "+ drag(zd[i] - current, A.bag_drag[i])", "- drag(zd[i] - current, A.bag_drag[i])",
+      "bag drag along the motion instead of against it"),
+    M("buoyancy-capacity", "ascent/mechanics.py",
+      "point[i] = (buoyancy(V[i], A.rho_g)", "point[i] = (buoyancy(A.capacity[i], A.rho_g)",
+      "bags lift their full capacity, not their gas volume"),
+    M("sling-break", "ascent/mechanics.py",
+      "A.bag_drag[i])) * attached[i]", "A.bag_drag[i]))",
+      "a broken sling's bag still lifts the hull"),
+    M("contact-always-bilateral", "ascent/mechanics.py",
+      "contact_load(w[s], wv[s], A.strip_k[s], A.strip_c[s], held)",
+      "contact_load(w[s], wv[s], A.strip_k[s], A.strip_c[s], True)",
+      "the seabed holds the hull down after separation (bilateral contact)"),
+    M("suction-sign", "ascent/mechanics.py",
+      "line[s] -= H[g] * A.strip_hold[s]", "line[s] += H[g] * A.strip_hold[s]",
+      "the released suction pulls the hull up"),
+    M("contact-damping-implicit", "ascent/mechanics.py",
+      "damp[i, j] += fi * A.strip_c[s] * sj", "damp[i, j] += 0.0 * fi * A.strip_c[s] * sj",
+      "the seabed's damper left out of the implicit step"),
+    M("trapezoidal-position", "ascent/mechanics.py",
+      "q[i] += h * v[i] + 0.5 * h * dv", "q[i] += h * v[i] + h * dv",
+      "position advanced with the end velocity, not the trapezoidal average"),
+    M("trapezoidal-stiffness-velocity", "ascent/mechanics.py",
+      "work[i] = h * s - 0.5 * h * h * kv", "work[i] = h * s",
+      "the trapezoidal rule's -h^2/2 K v term dropped (first order)"),
+    M("uplift-sling", "ascent/recording.py",
+      "total += A.rho_g * V[i] * attached[i]", "total += A.rho_g * V[i]",
+      "the hold's uplift still counts a broken sling's bag"),
+    # ------------------------------------------------------------------ gas and hold in the loop
+    M("purge-orifice-loop", "ascent/kernel.py",
+      "purge = purge_flow(R.opening[i], R.V[i], A.capacity[i], A.purge_max)",
+      "purge = R.opening[i] * A.purge_max",
+      "the loop's start-of-step purge flow without the orifice law"),
+    M("boyle-loop", "ascent/kernel.py",
+      "p1 = ambient_pressure(R.z[i], A.water_depth, A.p_atm, A.rho_g)", "p1 = R.p[i]",
+      "the gas pressure not updated as the bag rises: no expansion"),
+    M("heun-euler", "ascent/kernel.py",
+      "return max(R.n[i] + 0.5 * dt * (R.ndot[i] + ndot1), 0.0)",
+      "return max(R.n[i] + dt * R.ndot[i], 0.0)",
+      "gas stepped by explicit Euler instead of Heun"),
+    M("leak-loop", "ascent/kernel.py",
+      "R.ndot[i] = moles_rate(R.p[i], fill, purge, A.RT) - W.leak[i] * R.n[i]",
+      "R.ndot[i] = moles_rate(R.p[i], fill, purge, A.RT)",
+      "a ruptured bag's leak left out of the start-of-step rate"),
+    M("relief-loop", "ascent/kernel.py",
+      "vented_moles(n, p, A.capacity[i], A.relief[i], A.RT)",
+      "vented_moles(n, p, A.capacity[i], 0.0, A.RT)",
+      "closed bags vent at ambient pressure: relief setting ignored by the loop"),
+    M("holding-rate-loop", "ascent/kernel.py",
+      "rate = holding_rate(R.gap[g] + R.H_old[g], A.H0[g], A.breakout_time)",
+      "rate = holding_rate(R.gap[g], A.H0[g], A.breakout_time)",
+      "the hold decays under uplift minus hold instead of the uplift"),
+    M("separation-interpolation", "ascent/kernel.py",
+      "th = min(max(g0 / (g0 - gap), 0.0), 1.0) if g0 <= 0.0 else 0.0", "th = 1.0",
+      "separation at the end of its step, not located inside it"),
+    # ------------------------------------------------------------------ faults
+    M("supply-failure", "ascent/faults.py",
+      "sw.supply[i] = 0.0", "sw.supply[i] = 1.0",
+      "a supply failure has no effect"),
+    M("rupture-rate", "ascent/faults.py",
+      "sw.leak[i] = 1.0 / fault.leak_time_s", "sw.leak[i] = 0.5 / fault.leak_time_s",
+      "a ruptured bag leaks at half the rate of its leak time"),
+    # ------------------------------------------------------------------ control
+    M("pitch-rate-sign", "control/controller.py",
+      "+ C.k_pitch_rate * xzd / xx", "- C.k_pitch_rate * xzd / xx",
+      "coordinated pitch-rate feedback with the wrong sign"),
+    M("pitch-angle-sign", "control/controller.py",
+      "corr = C.k_pitch * xz / xx", "corr = -C.k_pitch * xz / xx",
+      "coordinated pitch-angle feedback with the wrong sign"),
+    M("fill-deadband", "control/controller.py",
+      "if eps > C.deadband else 0.0", "if eps > 0.0 else 0.0",
+      "fill starts within the deadband"),
+    M("purge-anti-windup", "control/controller.py",
+      "hold = (raw >= 1.0 and excess > 0.0) or not on", "hold = not on",
+      "purge integral winds up while the valve is saturated"),
+    M("sifsmc-slope", "control/controller.py",
+      "(S.eps_rate[i] + C.lam * eps) * gain", "(S.eps_rate[i] + eps) * gain",
+      "SIFSMC sliding variable without the slope lambda"),
+    M("adapted-neutral-volume", "control/controller.py",
+      "S.V_d[i] = C.V_neutral[i] + S.adapt[i] + S.u[i] * C.dV_max[i]",
+      "S.V_d[i] = C.V_neutral[i] + S.u[i] * C.dV_max[i]",
+      "the adapted neutral volume left out of V_d"),
+    M("speed-filter", "control/controller.py",
+      "S.zd_f[:] += a * (zd - S.zd_f)", "S.zd_f[:] = zd",
+      "measured speed not filtered"),
+    M("supervisor-rate-sign", "control/controller.py",
+      "S.r_in[i] = min(max((vel - S.zd_f[i]) / C.r_scale, -1.0), 1.0)",
+      "S.r_in[i] = min(max((S.zd_f[i] - vel) / C.r_scale, -1.0), 1.0)",
+      "the supervisor's rate input with the wrong sign"),
+)
+
+
+@dataclass
+class Outcome:
+    name: str
+    file: str
+    description: str
+    outcome: str  # killed, survived, timeout, error
+    seconds: float
+    first_failure: str  # the first failing test (or why it is an error)
+
+
+def copy_tree(dest: Path) -> None:
+    """src/, tests/ and pyproject.toml (the pytest settings) of the checkout into ``dest``,
+    without compiled or cached files."""
+    skip = shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc", ".pytest_cache",
+                                  ".hypothesis", "*.egg-info")
+    for name in ("src", "tests"):
+        shutil.copytree(ROOT / name, dest / name, ignore=skip)
+    shutil.copy2(ROOT / "pyproject.toml", dest / "pyproject.toml")
+
+
+def apply(mutation: Mutation, dest: Path) -> None:
+    """Write ``mutation`` into the copy at ``dest``; ValueError unless its original occurs
+    exactly once."""
+    path = dest / "src" / "flexlift" / mutation.file
+    text = path.read_text()
+    count = text.count(mutation.original)
+    if count != 1:
+        raise ValueError(f"{mutation.name}: the original occurs {count} times in {mutation.file}")
+    path.write_text(text.replace(mutation.original, mutation.replacement))
+
+
+def environment(dest: Path) -> dict:
+    env = dict(os.environ)
+    env.update(PYTHONPATH=str(dest / "src"), NUMBA_CACHE_DIR=str(dest / "numba-cache"),
+               MPLBACKEND="Agg", PYTHONDONTWRITEBYTECODE="1")
+    env.pop("NUMBA_DISABLE_JIT", None)
+    return env
+
+
+def imported_from(dest: Path) -> str:
+    """Where ``import flexlift`` finds the package with the copy's environment."""
+    out = subprocess.run([sys.executable, "-c", "import flexlift; print(flexlift.__file__)"],
+                         cwd=dest, env=environment(dest), capture_output=True, text=True,
+                         check=True)
+    return out.stdout.strip()
+
+
+def first_failure(output: str) -> str:
+    for line in output.splitlines():
+        m = re.match(r"(FAILED|ERROR) (\S+)", line)
+        if m:
+            return m.group(2)
+    return ""
+
+
+def run_one(mutation: Mutation | None, tests, timeout: float, keep: bool) -> Outcome:
+    """Copy, mutate, check the import, run the tests; the outcome with its time."""
+    t0 = time.monotonic()
+    name = mutation.name if mutation else "(unmutated)"
+    dest = Path(tempfile.mkdtemp(prefix=f"flexlift-mutant-{name.strip('()')}-"))
+    info = (mutation.file, mutation.description) if mutation else ("", "the code as it is")
+    try:
+        copy_tree(dest)
+        if mutation:
+            apply(mutation, dest)
+        where = Path(imported_from(dest)).resolve()
+        if where != (dest / "src" / "flexlift" / "__init__.py").resolve():
+            raise RuntimeError(f"flexlift imported from {where}, not from the mutant's copy")
+        cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *tests]
+        try:
+            proc = subprocess.run(cmd, cwd=dest, env=environment(dest), capture_output=True,
+                                  text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return Outcome(name, *info, "timeout", time.monotonic() - t0, f"over {timeout:.0f} s")
+        out = proc.stdout + proc.stderr
+        if proc.returncode == 0:
+            outcome = "survived"
+        elif proc.returncode == 1:
+            outcome = "killed"
+        else:
+            outcome = "error"
+        detail = first_failure(out) or (out.strip().splitlines() or [""])[-1]
+        return Outcome(name, *info, outcome, time.monotonic() - t0, detail)
+    except (ValueError, RuntimeError, subprocess.CalledProcessError) as e:
+        return Outcome(name, *info, "error", time.monotonic() - t0, str(e).splitlines()[0])
+    finally:
+        if keep:
+            print(f"  kept {dest}", flush=True)
+        else:
+            shutil.rmtree(dest, ignore_errors=True)
+
+
+def measured_code() -> str:
+    """The commit whose src/ and tests/ were mutated (and whether they had local changes)."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True,
+                              capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "src", "tests"], cwd=ROOT,
+                               check=True, capture_output=True, text=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown (not a git checkout)"
+    return head + (" with uncommitted changes" if dirty else "")
+
+
+def score(results) -> dict:
+    killed = sum(r.outcome in ("killed", "timeout") for r in results)
+    return {"killed": killed, "total": len(results),
+            "score_pct": round(100.0 * killed / max(len(results), 1), 1),
+            "survived": [r.name for r in results if r.outcome == "survived"],
+            "errors": [r.name for r in results if r.outcome == "error"]}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", nargs="+", metavar="NAME", help="run only these mutations")
+    ap.add_argument("--list", action="store_true", help="list the mutations and check that "
+                    "each original occurs exactly once; run nothing")
+    ap.add_argument("--tests", nargs="+", default=list(TESTS), help="the test files to run")
+    ap.add_argument("--json", default=str(ROOT / "benchmarks" / "mutation.json"))
+    ap.add_argument("--keep", action="store_true", help="keep the mutants' folders")
+    args = ap.parse_args(argv)
+    chosen = [m for m in MUTATIONS if not args.only or m.name in args.only]
+    if args.only and len(chosen) != len(set(args.only)):
+        known = {m.name for m in MUTATIONS}
+        ap.error(f"unknown mutations: {', '.join(sorted(set(args.only) - known))}")
+    if args.list:
+        bad = 0
+        for m in chosen:
+            n = (ROOT / "src" / "flexlift" / m.file).read_text().count(m.original)
+            bad += n != 1
+            print(f"{m.name:32s} {m.file:24s} {'ok' if n == 1 else f'FOUND {n} TIMES'}  "
+                  f"{m.description}")
+        return 1 if bad else 0
+
+    print(f"mutation check: {len(chosen)} mutations, tests: {' '.join(args.tests)}", flush=True)
+    base = run_one(None, args.tests, timeout=3600.0, keep=False)
+    verdict = "passed" if base.outcome == "survived" else f"{base.outcome}: {base.first_failure}"
+    print(f"unmutated: {verdict} in {base.seconds:.0f} s", flush=True)
+    if base.outcome != "survived":
+        print("the unmutated code must pass its tests first", file=sys.stderr)
+        return 2
+    timeout = max(600.0, 4.0 * base.seconds)
+    results = []
+    t0 = time.monotonic()
+    for k, m in enumerate(chosen, 1):
+        r = run_one(m, args.tests, timeout, args.keep)
+        results.append(r)
+        print(f"[{k:2d}/{len(chosen)}] {r.outcome:8s} {r.seconds:5.0f} s  {m.name:32s} "
+              f"{r.first_failure}", flush=True)
+    total = time.monotonic() - t0
+    s = score(results)
+    print()
+    print("| mutation | file | outcome | s | first failing test |")
+    print("|---|---|---|---|---|")
+    for r in results:
+        print(f"| {r.name} | {r.file} | {r.outcome} | {r.seconds:.0f} | {r.first_failure} |")
+    print(f"\nscore: {s['killed']} of {s['total']} killed ({s['score_pct']} %) in {total / 60:.0f} "
+          f"min ({total / max(len(results), 1):.0f} s a mutant); unmutated run {base.seconds:.0f} s")
+    if s["survived"]:
+        print("survived: " + ", ".join(s["survived"]))
+    report = {"code": measured_code(), "tests": list(args.tests),
+              "python": sys.version.split()[0],
+              "unmutated_seconds": round(base.seconds, 1), "total_seconds": round(total, 1),
+              **s, "mutations": [{**asdict(r), "seconds": round(r.seconds, 1)} for r in results]}
+    Path(args.json).write_text(json.dumps(report, indent=2) + "\n")
+    print(f"wrote {args.json}")
+    return 0 if not s["errors"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
