@@ -13,6 +13,7 @@ from pathlib import Path
 
 from flexlift.cli._common import add_scenario_arg, emit_json, scenario_from
 from flexlift.output import output_folder, write_json, write_text
+from flexlift.output.controllers import copy_controller_files
 from flexlift.output.report import render_report
 from flexlift.stages.run import CONTROL_MODES, DEFAULT_CONTROLS, STAGES, run_all, summary_of
 
@@ -103,8 +104,11 @@ def _main(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     with output_folder(out, "run") as tmp:  # refuses folders flexlift did not write
         outputs = run_all(scenario, tmp, args.stages, args.control, progress)
+        as_written, copies = copy_controller_files(scenario, tmp)
         summary = summary_of(scenario, outputs, time.perf_counter() - t0)
-        write_text(tmp / "scenario.yaml", scenario.to_yaml())
+        if copies:
+            summary["controller_files"] = copies
+        write_text(tmp / "scenario.yaml", as_written.to_yaml())
         write_json(tmp / "summary.json", summary)
         write_text(tmp / "report.html", render_report(scenario, outputs))
     if args.json:

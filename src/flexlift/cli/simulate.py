@@ -19,6 +19,7 @@ from flexlift.cli._common import (
     scenario_from,
     writing,
 )
+from flexlift.output.controllers import copy_controller_files
 from flexlift.stages.simulate import MODES, run_stage
 
 
@@ -39,6 +40,8 @@ def _main(args: argparse.Namespace) -> int:
     with writing(args.out, "simulate") as folder:
         out = run_stage(scenario, folder, control=args.control, duration=args.duration,
                         primary=True)
+        if folder is not None:
+            copy_controller_files(scenario, folder)  # the user's .fis files, with checksums
     s = out.summary
     if args.json:
         emit_json(s)

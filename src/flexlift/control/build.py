@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import os
 
 import numpy as np
 
@@ -52,27 +53,65 @@ def planned_profile(scenario, plant):
                          c.purge_margin, a.water_depth, a.p_atm, a.rho_g)
 
 
-def supervisor_fis_of(scenario):
-    """The scenario's supervisory fuzzy system (the built-in rule base, its operators)."""
-    from flexlift.fuzzy.rulebase import supervisor_fis_from
-
-    return supervisor_fis_from(scenario.control.supervisor)
+def _stamp(path: str | None, key: str):
+    """(path, size, modification time) of a user's file: a changed file is read again."""
+    if path is None:
+        return None
+    try:
+        st = os.stat(path)
+    except OSError as exc:
+        raise InputError(key, path, f"cannot be read ({exc.strerror}); give the path of a MATLAB "
+                         ".fis file, relative to the scenario file's folder") from None
+    return (path, st.st_size, st.st_mtime_ns)
 
 
 @functools.lru_cache(maxsize=16)
-def _supervisor_table(settings) -> Table2D:
-    """The supervisor of ``control.supervisor`` settings sampled into a lookup table (once
-    per settings: 40,401 exact evaluations take ~0.2 s)."""
+def _user_fis(stamp, role: str, resolution: int):
+    from flexlift.fuzzy.fis import load_controller_fis
+
+    return load_controller_fis(stamp[0], role, resolution=resolution)
+
+
+def _supervisor_of(settings):
     from flexlift.fuzzy.rulebase import supervisor_fis_from
 
-    return Table2D.sample(supervisor_fis_from(settings), TABLE_GRID)
+    stamp = _stamp(settings.fis_file, "control.supervisor.fis_file")
+    if stamp is None:
+        return supervisor_fis_from(settings)
+    return _user_fis(stamp, "supervisor", settings.resolution)
 
 
-@functools.lru_cache(maxsize=1)
-def _fill_map():
-    from flexlift.fuzzy.rulebase import fill_fis
+def supervisor_fis_of(scenario):
+    """The scenario's supervisory fuzzy system: the user's .fis file
+    (``control.supervisor.fis_file``) or the built-in rule base with the scenario's operators."""
+    return _supervisor_of(scenario.control.supervisor)
 
-    return fill_fis()
+
+@functools.lru_cache(maxsize=16)
+def _supervisor_table_of(settings, stamp) -> Table2D:
+    return Table2D.sample(_supervisor_of(settings), TABLE_GRID)
+
+
+def _supervisor_table(settings) -> Table2D:
+    """The supervisor of ``control.supervisor`` settings sampled into a lookup table (once
+    per settings and file: 40,401 exact evaluations take ~0.2 s)."""
+    return _supervisor_table_of(settings, _stamp(settings.fis_file, "control.supervisor.fis_file"))
+
+
+@functools.lru_cache(maxsize=16)
+def _fill_map_of(stamp):
+    from flexlift.fuzzy.rulebase import FillMap, fill_fis
+
+    if stamp is None:
+        return fill_fis()
+    return FillMap(_user_fis(stamp, "fill", 101), normalise=False,
+                   source="control.fill.fis_file")
+
+
+def fill_map_of(scenario):
+    """The scenario's SIFSMC fill map: the user's .fis file (``control.fill.fis_file``) or
+    the built-in one."""
+    return _fill_map_of(_stamp(scenario.control.fill.fis_file, "control.fill.fis_file"))
 
 
 def fuzzy_maps(scenario, engine="table"):
@@ -82,7 +121,7 @@ def fuzzy_maps(scenario, engine="table"):
     -> u (n,)), or a pair (supervisor, fill) of callables."""
     from flexlift.fuzzy.rulebase import FillMap
 
-    fill = _fill_map()
+    fill = fill_map_of(scenario)
     if isinstance(engine, str):
         if engine not in ("table", "exact"):
             raise InputError("engine", engine, "use 'table', 'exact', a callable or a pair")

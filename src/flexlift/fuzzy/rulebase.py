@@ -103,13 +103,22 @@ class FillMap:
 
     fis: FIS
     points: int = 4001
+    #: scale to 1 at d = 1 and pin 0 at d = 0 (the built-in map); False: a user's map, used
+    #: as it is after checking that it is a fill fraction that does not decrease
+    normalise: bool = True
+    source: str = "fill map"  # names the map in errors
     table: Table1D = field(init=False, repr=False)  # fill fractions over d in [0, 1]
 
     def __post_init__(self):
         d = np.linspace(0.0, 1.0, self.points)
-        raw = np.asarray(self.fis(d), dtype=float) / float(self.fis(1.0))
+        raw = np.asarray(self.fis(d), dtype=float)
+        if self.normalise:
+            raw = raw / float(self.fis(1.0))
+        else:
+            _check_user_fill(raw, d, self.source)
         v = np.clip(np.maximum.accumulate(raw), 0.0, 1.0)
-        v[0], v[-1] = 0.0, 1.0  # d = 0 gives a centroid of +-1e-17: that is no fill
+        if self.normalise:
+            v[0], v[-1] = 0.0, 1.0  # d = 0 gives a centroid of +-1e-17: that is no fill
         object.__setattr__(self, "table", Table1D(v, (0.0, 1.0)))
 
     def __call__(self, x):
@@ -119,6 +128,19 @@ class FillMap:
         if np.isnan(arr).any():
             raise InputError("fill map input", "nan", "the signed distance d must be a number")
         return self.table(arr)  # 0 below d = 0, 1 above d = 1: the loop's own lookup
+
+
+def _check_user_fill(raw: np.ndarray, d: np.ndarray, source: str) -> None:
+    """A user's fill map must give a fill fraction in [0, 1] that never falls as d grows."""
+    if not np.all(np.isfinite(raw)) or raw.min() < -1e-9 or raw.max() > 1.0 + 1e-9:
+        k = int(np.argmax(~np.isfinite(raw) | (raw < -1e-9) | (raw > 1 + 1e-9)))
+        raise InputError(source, f"output {raw[k]:.4g} at d = {d[k]:.3f}",
+                         "a fill map's output is a fill fraction within [0, 1]")
+    drop = np.diff(raw)
+    if drop.min() < -1e-6:
+        k = int(np.argmin(drop))
+        raise InputError(source, f"falls from {raw[k]:.4g} to {raw[k + 1]:.4g} at d = {d[k]:.3f}",
+                         "a fill map must not decrease as the deficit d grows over [0, 1]")
 
 
 def fill_fis(resolution: int = 101) -> FillMap:

@@ -10,6 +10,7 @@ import base64
 import html
 import math
 from datetime import UTC, datetime
+from pathlib import Path
 
 from flexlift import __version__
 from flexlift.output.stage import StageOutput
@@ -89,6 +90,16 @@ def _criteria(criteria: dict[str, bool]) -> str:
     return f"<table><thead><tr><th>criterion</th><th>result</th></tr></thead><tbody>{rows}</tbody></table>"
 
 
+def _controller_file(scenario, role: str) -> str:
+    """Which fuzzy system ran as ``role``: the built-in one or the user's file, by checksum."""
+    from flexlift.scenario.schema import file_sha256
+
+    path = scenario.controller_files().get(f"control.{role}.fis_file")
+    if path is None:
+        return "built-in rule base (SPEC §7)"
+    return f"the user's MATLAB file {Path(path).name}, SHA-256 {file_sha256(path)}"
+
+
 def _faults(scenario) -> str:
     """The scenario's faults, one phrase each ("none" when the run is fault-free)."""
     parts = []
@@ -128,6 +139,8 @@ def _particulars(scenario) -> str:
         ("Limits", f"ascent < {scenario.limits.ascent_velocity_m_s:g} m/s, "
                    f"descent < {scenario.limits.descent_velocity_m_s:g} m/s, "
                    f"pitch < {scenario.limits.pitch_deg:g}°, no surface breach"),
+        ("Supervisory controller", _controller_file(scenario, "supervisor")),
+        ("Fill map", _controller_file(scenario, "fill")),
         ("Faults", _faults(scenario)),
         ("Disturbances", _disturbances(scenario.disturbance)),
     ]

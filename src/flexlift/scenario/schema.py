@@ -23,7 +23,16 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    StringConstraints,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
@@ -241,6 +250,19 @@ class Hydro(_Section):
 
 
 # --------------------------------------------------------------------------- control
+def _fis_file(value: str) -> str:
+    if any(ord(ch) < 32 or ord(ch) == 127 for ch in value):
+        raise ValueError("a path without control characters")
+    if not value.lower().endswith(".fis"):
+        raise ValueError(f"{value!r} is not a .fis file; give the path of a MATLAB .fis file")
+    return value
+
+
+#: the path of a user's MATLAB .fis file (checked when it is read: it must exist and fit)
+FisFile = Annotated[str, StringConstraints(min_length=5, max_length=4096),
+                    AfterValidator(_fis_file)]
+
+
 class Supervisor(_Section):
     """The supervisory Mamdani controller (SPEC §7)."""
 
@@ -253,6 +275,10 @@ class Supervisor(_Section):
     aggregation: Literal["max", "sum", "probor"] = "max"
     defuzzification: Literal["centroid", "bisector", "mom", "som", "lom"] = "centroid"
     resolution: whole(11, 10_001) = 101  # points of the output universe (tables are built on it)
+    # a MATLAB .fis file in place of the built-in rule base (null: built in); a relative path is
+    # relative to the scenario file's folder. Two inputs (e, edot: by name, else in order), one
+    # output u within [-1, 1]; evaluated at the normalised e, edot in [-1, 1]
+    fis_file: FisFile | None = None
 
 
 class FillControl(_Section):
@@ -260,6 +286,9 @@ class FillControl(_Section):
 
     slope_1_s: real(1e-4, 1_000) = 0.2  # lambda in s = de/dt + lambda e [1/s]
     distance_scale_m3_s: real(1e-4, 1_000) = 0.5  # signed distance giving a full command
+    # a MATLAB .fis file for the fill map (null: built in): one input d (the normalised signed
+    # distance, evaluated over [0, 1]), one output: the fill fraction, non-decreasing in [0, 1]
+    fis_file: FisFile | None = None
 
 
 class PurgeControl(_Section):
@@ -434,8 +463,23 @@ class Scenario(_Section):
         return dump_yaml(self.model_dump(mode="json"))
 
     def checksum(self) -> str:
-        """SHA-256 of the canonical YAML: two runs with the same checksum had the same input."""
-        return hashlib.sha256(self.to_yaml().encode()).hexdigest()
+        """SHA-256 of the canonical YAML: two runs with the same checksum had the same input.
+        A user's .fis file counts by its contents (its SHA-256), not by where it lies, so the
+        copy in an output folder has the checksum of the original."""
+        files = {key: path for key, path in self.controller_files().items()}
+        if not files:
+            return hashlib.sha256(self.to_yaml().encode()).hexdigest()
+        data = self.model_dump(mode="json")
+        for key, path in files.items():
+            section, sub_, _ = key.split(".")
+            data[section][sub_]["fis_file"] = "sha256:" + file_sha256(path)
+        return hashlib.sha256(dump_yaml(data).encode()).hexdigest()
+
+    def controller_files(self) -> dict[str, str]:
+        """The user's .fis files by key ("control.supervisor.fis_file", ...): path."""
+        c = self.control
+        return {f"control.{k}.fis_file": v for k, v in
+                (("supervisor", c.supervisor.fis_file), ("fill", c.fill.fis_file)) if v}
 
     def with_changes(self, **dotted) -> Scenario:
         """A copy with dotted keys changed, validated: ``s.with_changes(**{"hull.elements": 40})``."""
@@ -478,6 +522,21 @@ EMPTY = ("the file is empty (or only comments); an empty scenario is not read as
          "layout and breakout pull; the built-in `tanker` keeps the paper's)")
 
 
+def file_sha256(path) -> str:
+    """SHA-256 of a file's bytes (hex), or of its path when it cannot be read."""
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return hashlib.sha256(str(path).encode()).hexdigest()
+
+
+def _resolve_files(scenario: Scenario, folder: Path) -> Scenario:
+    """``scenario`` with relative .fis paths made relative to ``folder`` (the scenario file's)."""
+    moved = {k: str((folder / p).resolve()) for k, p in scenario.controller_files().items()
+             if not Path(p).is_absolute()}
+    return scenario.with_changes(**moved) if moved else scenario
+
+
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     """Load a built-in scenario by name (default ``tanker``) or a YAML file by path.
 
@@ -499,4 +558,5 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     if not isinstance(data, dict):
         raise InputError(source, type(data).__name__, "a scenario file must hold a YAML mapping "
                          "of keys (name: ..., hull: ..., ...)")
-    return parse_scenario(data, source=source)
+    scenario = parse_scenario(data, source=source)
+    return _resolve_files(scenario, path.parent) if path.exists() else scenario

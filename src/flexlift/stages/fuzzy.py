@@ -8,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from flexlift.control.build import fill_map_of, supervisor_fis_of
 from flexlift.errors import InputError
 from flexlift.fuzzy.fis import read_fis, to_fis_text
-from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis_from
 from flexlift.fuzzy.system import FIS
 from flexlift.output.files import write_text
 from flexlift.output.stage import Figure, StageOutput, Table
@@ -21,8 +21,9 @@ PLOT_GRID = 61
 
 
 def load_system(scenario, fis_file: str | Path | None = None, extrapolate: bool = False) -> FIS:
-    """The built-in supervisor with the scenario's operators, or a MATLAB .fis file."""
-    fis = supervisor_fis_from(scenario.control.supervisor) if fis_file is None else \
+    """The scenario's supervisor (the user's ``control.supervisor.fis_file``, else the built-in
+    rule base with the scenario's operators), or any MATLAB .fis file given here."""
+    fis = supervisor_fis_of(scenario) if fis_file is None else \
         read_fis(fis_file, resolution=scenario.control.supervisor.resolution)
     return fis.with_options(out_of_range="extrapolate") if extrapolate else fis
 
@@ -91,6 +92,10 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
     extrapolate : evaluate the sets beyond the input ranges, as MATLAB (default: saturate)
     """
     fis = load_system(scenario, fis_file, extrapolate)
+    own = fis_file is None  # the scenario's own controllers (else a file given to analyse)
+    if own and scenario.control.supervisor.fis_file:
+        fis_file = scenario.control.supervisor.fis_file  # the scenario's own: the loop's
+    builtin = fis_file is None
     outputs = [{"name": v.name, "range": list(v.range), "sets": list(v.labels)}
                for v in fis.outputs]
     summary: dict = {
@@ -117,21 +122,23 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
                               "error_bound": surf.error_bound, "checked_points": surf.n_checked}
         summary["symmetry_error"] = float(np.max(np.abs(fis(q) + fis(2 * mid - q))))
         criteria["surface_interpolation_error_below_0.01"] = surf.max_error < 0.01
-        if fis_file is None:
+        if builtin:
             criteria["surface_odd_symmetric"] = summary["symmetry_error"] < 1e-9
-    if fis_file is None:
-        fill = fill_fis()
+    if own:
+        fill = fill_map_of(scenario)
+        summary["fill_map_source"] = scenario.control.fill.fis_file or "built-in (SPEC §7)"
         summary["fill_map"] = {"d": [-1.0, 0.0, 0.25, 0.5, 0.75, 1.0],
                                "fill": [fill(d) for d in (-1.0, 0.0, 0.25, 0.5, 0.75, 1.0)]}
     tables = [_rule_table(fis), _sets_table(fis)]
     figures: list[Figure] = []
     if out is not None:
-        figures = _write(Path(out), fis, tables, fis_file is None)
+        figures = _write(Path(out), fis, tables, scenario if own else None)
     return StageOutput(name=NAME, summary=summary, figures=figures, tables=tables,
                        criteria=criteria)
 
 
-def _write(out: Path, fis: FIS, tables: list[Table], builtin: bool) -> list[Figure]:
+def _write(out: Path, fis: FIS, tables: list[Table], scenario=None) -> list[Figure]:
+    """Figures and tables of ``fis``; with ``scenario``, its fill map as well."""
     from flexlift.output.plots._style import save
     from flexlift.output.plots.fuzzy import (
         plot_map,
@@ -157,8 +164,8 @@ def _write(out: Path, fis: FIS, tables: list[Table], builtin: bool) -> list[Figu
                                       title=f"Control surface of {fis.name}"),
                  fdir / "fuzzy_surface_contour.png"),
             "Control surface as contours; the black line is u = 0."))
-    if builtin:
-        fill = fill_fis()
+    if scenario is not None:  # the fill map the simulation uses (built in or the user's)
+        fill = fill_map_of(scenario)
         d = np.linspace(-1.0, 1.0, 401)
         figures.append(Figure(save(plot_map(d, fill(d)), fdir / "fuzzy_fill_map.png"),
                               "SIFSMC fill map: signed distance d to the fill fraction of "
