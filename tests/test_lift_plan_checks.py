@@ -88,9 +88,12 @@ def test_each_check_fires_on_a_case_built_to_trip_it(tanker, name, changes):
 @pytest.mark.parametrize("changes, field", [
     ({"environment.water_depth_m": 40.0, "control.target_height_m": 35.0}, "control.target_height_m"),
     ({"control.breakout_pull_t": 0.0}, "control.breakout_pull_t"),
+    ({"environment.steel_density_kg_m3": 1500.0, "lift.layout": "balanced"}, "internal_bags"),
 ])
 def test_unworkable_plans_are_refused_with_the_field(tanker, changes, field):
     sc = tanker.with_changes(**changes)
+    plant = coupled_plant(sc)
+    assert all(isinstance(c.ok, bool) for c in plan_checks(sc, plant))  # the checks still run
     with pytest.raises(InputError, match=field.replace(".", r"\.")):
         simulate(sc, control="coordinated", duration=10.0)
 
@@ -175,3 +178,14 @@ def test_a_bad_lift_plan_is_one_line_naming_the_field_exit_2(tmp_path, capsys, t
     assert main(["loads", str(p)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and needle in err and "Traceback" not in err, err
+
+
+def test_an_external_bag_between_nodes_reduces_as_a_point_load(tanker):
+    """The reduce stage's state space of a bag placed in metres off the nodes (Hermite)."""
+    from flexlift.stages.reduce import run_stage
+
+    sc = tanker.with_changes(**{"lift.bags": [
+        {"name": n, "kind": "external", "x_m": x}
+        for n, x in (("a", 10.3), ("b", 31.7), ("c", 50.2), ("d", 70.9))]})
+    out = run_stage(sc, None)
+    assert out.summary and all(out.criteria.values()) or out.criteria == {}

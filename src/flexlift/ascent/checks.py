@@ -44,6 +44,10 @@ def refuse_unworkable(scenario, plant) -> None:
     """InputError (one line) for a plan that cannot work: the target above where the bags
     reach the surface, no breakout pull, or closed bags relieving above their working pressure."""
     env, lim, c = scenario.environment, scenario.limits, scenario.control
+    if not plant.external.any():
+        raise InputError("lift.internal_bags", scenario.lift.internal_bags,
+                         f"all {plant.external.size} bags are internal: none is left to pull the "
+                         "hull off the seabed and control the ascent; use fewer internal bags")
     top = float(plant.arrays.top_offset.max())
     highest = env.water_depth_m - lim.surface_clearance_m - top
     if c.target_height_m >= highest:
@@ -114,6 +118,8 @@ def purge_check(scenario, plant) -> Check:
     """From which height up the planned speed cannot be held by purging."""
     a, c = plant.arrays, scenario.control
     ext = np.flatnonzero(plant.external)
+    if not ext.size:
+        return Check("purge_capacity", True, "no external bags: nothing to purge")
     z = np.linspace(0.0, c.target_height_m, 2001)
     lim = np.min([speed_limit(z, plant.neutral_volume[i], a.capacity[i], a.purge_max,
                               c.purge_margin, a.water_depth, a.p_atm, a.rho_g) for i in ext], axis=0)
@@ -135,6 +141,8 @@ def fill_check(scenario, plant) -> Check:
     """How long the supply takes to fill the breakout pull."""
     a = plant.arrays
     n_ext = int(plant.external.sum())
+    if not n_ext:
+        return Check("fill", True, "no external bags: nothing is filled during the run")
     pull = breakout_pull(scenario, float(a.H0.sum())) / a.rho_g  # [m^3] at local pressure
     t_fill = pull / max(n_ext * scenario.gas.fill_rate_max_m3_s, 1e-12)
     V_n = plant.neutral_volume[plant.external]

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexlift.errors import InputError
-from flexlift.structure.beam import shape_functions
+from flexlift.structure.beam import point_load_vector, shape_functions
 from flexlift.structure.hull import Hull
 from flexlift.structure.modes import Modes
 
@@ -186,6 +186,8 @@ def _parse(name: str, kind: str, hull: Hull, bags: Mapping) -> tuple[str, str, o
 def _shape(hull: Hull, where: str, what) -> np.ndarray:
     """Unit force distribution (== displacement-extraction vector) for a node or a bag."""
     if where == "bag" and what.node is None:
+        if what.span is None:  # an external bag between nodes: a point load (Hermite)
+            return point_load_vector(hull, what.x, 1.0)
         return _unit_uniform_load(hull, what.span)
     node = what if where == "node" else what.node
     f = np.zeros(2 * hull.n_nodes)

@@ -141,6 +141,10 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
     g, rho = env.gravity_m_s2, env.seawater_density_kg_m3
     dry = hull.total_mass * g
     wet = float(submerged_weight(hull.total_mass, g, rho, env.steel_density_kg_m3))
+    if not wet > 0:
+        raise InputError("environment.steel_density_kg_m3", env.steel_density_kg_m3,
+                         f"the structure floats (wet weight {wet / (C.TONNE * g):.0f} t): a steel "
+                         f"denser than the seawater's {rho:g} kg/m3 is needed, or nothing is lifted")
     required = lift.breakout_factor * wet
     cat = lift.catalogue_bag.lift_t * C.TONNE * g
     n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)

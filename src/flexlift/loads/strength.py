@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexlift.errors import InputError
-from flexlift.structure.beam import shape_functions
+from flexlift.structure.beam import element_of, point_load_vector, shape_functions  # noqa: F401 (re-exported)
 from flexlift.structure.hull import Hull
 
 # 3-point Gauss-Legendre on [0, 1]: exact to degree 5 (a cubic shape function times a
@@ -134,30 +134,6 @@ class LoadCase:
 
 
 # ----------------------------------------------------------------------------- nodal loads
-def _element_of(hull: Hull, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    l = hull.element_length
-    e = np.clip(np.floor(x / l).astype(int), 0, hull.n_elements - 1)
-    return e, x / l - e
-
-
-def point_load_vector(hull: Hull, x: float, force: float | np.ndarray = 1.0) -> np.ndarray:
-    """Consistent nodal loads of a point force at any position.
-
-    hull : the beam (equal elements)
-    x : position of the force, 0..L [m]
-    force : upward force [N]; an array gives one vector per value (shape force.shape + (N,))
-    returns : ndarray (..., 2 (n + 1)) — nodal forces [N] and moments [N m]
-    """
-    L = hull.length
-    if not (np.isfinite(x) and -1e-9 * L <= x <= L * (1 + 1e-9)):
-        raise InputError("point load x", x, f"must lie on the hull, 0..{L:g} m")
-    x = float(np.clip(x, 0.0, L))
-    e, xi = _element_of(hull, np.array([x]))
-    f = np.zeros(2 * hull.n_nodes)
-    f[2 * e[0] : 2 * e[0] + 4] = shape_functions(xi, hull.element_length)[0]
-    return np.asarray(force, dtype=float)[..., None] * f
-
-
 def line_load_vector(
     hull: Hull, x0: float, x1: float, q0: float, q1: float | None = None
 ) -> np.ndarray:

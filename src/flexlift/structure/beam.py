@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from flexlift.errors import InputError
 from flexlift.structure.hull import Hull
 
 
@@ -132,3 +133,28 @@ def assemble(hull: Hull, extra_mass_per_length: np.ndarray | float = 0.0) -> Bea
         diag[0::2] = hull.point_masses
         M = (M + sp.diags(diag)).tocsc()
     return Beam(K=K, M=M, hull=hull)
+
+
+def element_of(hull: Hull, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(element index, local coordinate xi in [0, 1]) of positions ``x`` [m] along ``hull``."""
+    l = hull.element_length
+    e = np.clip(np.floor(x / l).astype(int), 0, hull.n_elements - 1)
+    return e, x / l - e
+
+
+def point_load_vector(hull: Hull, x: float, force: float | np.ndarray = 1.0) -> np.ndarray:
+    """Consistent nodal loads of a point force at any position.
+
+    hull : the beam (equal elements)
+    x : position of the force, 0..L [m]
+    force : upward force [N]; an array gives one vector per value (shape force.shape + (N,))
+    returns : ndarray (..., 2 (n + 1)) — nodal forces [N] and moments [N m]
+    """
+    L = hull.length
+    if not (np.isfinite(x) and -1e-9 * L <= x <= L * (1 + 1e-9)):
+        raise InputError("point load x", x, f"must lie on the hull, 0..{L:g} m")
+    x = float(np.clip(x, 0.0, L))
+    e, xi = element_of(hull, np.array([x]))
+    f = np.zeros(2 * hull.n_nodes)
+    f[2 * e[0] : 2 * e[0] + 4] = shape_functions(xi, hull.element_length)[0]
+    return np.asarray(force, dtype=float)[..., None] * f
