@@ -85,7 +85,7 @@ def test_segments_and_point_masses():
 def test_lift_points_sized_from_the_wet_weight_they_carry():
     s = _scenario(length_m=1000.0, elements=200, lift_points={"spacing_m": 50.0})
     bags = s.lift.bags
-    assert len(bags) == 20 and bags[0].x_m == 25.0 and bags[-1].x_m == 975.0
+    assert len(bags) == 20 and bags[0].node == 6 and bags[-1].node == 196  # 25 m, 975 m
     # each carries 50 m x 1976 N/m x breakout 1.3 = 13.09 t, rounded up to 0.1 t
     assert {b.lift_t for b in bags} == {math.ceil(50 * 1975.5 * 1.3 / 9810 * 10) / 10}
     p = _scenario(length_m=1000.0, elements=200, breakout_suction_kN_m=1.0,
@@ -125,3 +125,13 @@ def test_hull_number_contradicting_the_pipe(tmp_path, capsys):
     assert main(["loads", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "hull.elements is derived from the pipe" in err[0]
+
+
+def test_builtin_pipeline_scenario():
+    from flexlift.scenario import builtin_names, load_scenario
+
+    assert "pipeline" in builtin_names()
+    s = load_scenario("pipeline")
+    assert s.pipe is not None and s.hull.elements == 1000 and len(s.lift.bags) == 40
+    assert s.lift.breakout_factor == pytest.approx(1 + 500 / 1975.5, rel=1e-3)
+    assert all(b.lift_t <= s.lift.catalogue_bag.lift_t for b in s.lift.bags)

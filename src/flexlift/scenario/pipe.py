@@ -170,7 +170,8 @@ def _bags(pipe: Pipe, hull: dict, breakout: float, g: float, rho: float) -> list
                                                                           and a <= (e + .5) * L / n))
         lift_t = breakout * lp.margin * carried / (C.TONNE * g) / lp.count
         lift_t = max(0.01, math.ceil(lift_t * 10.0) / 10.0)  # up to 0.1 t
-        bag = {"name": f"{pipe.bag_prefix}{k + 1:0{width}d}", "kind": "external", "x_m": x,
+        node = int(min(max(round(x / L * n), 0), n)) + 1  # the bag hangs from the nearest node
+        bag = {"name": f"{pipe.bag_prefix}{k + 1:0{width}d}", "kind": "external", "node": node,
                "lift_t": lift_t}
         if lp.count > 1:
             bag["count"] = lp.count
