@@ -7,9 +7,9 @@ import pytest
 
 from flexlift.cli import main
 from flexlift.errors import InputError
+from flexlift.physics.pipe import Section
 from flexlift.scenario.schema import parse_scenario
 from flexlift.structure.hull import hull_from_scenario
-from flexlift.structure.pipe import Section
 
 BASE = {"name": "p", "environment": {"water_depth_m": 100.0},
         "control": {"target_height_m": 50.0}}

@@ -3,7 +3,7 @@
 Given instead of the ship's ``hull`` numbers: :func:`derive` fills the ``hull`` section (mass,
 EI and section modulus per element, the coated diameter as breadth), the explicit bags of
 ``lift.bags`` from the lift points, and the breakout factor from the suction per unit length,
-before the scenario is validated. The section laws are in :mod:`flexlift.structure.pipe`.
+before the scenario is validated. The section laws are in :mod:`flexlift.physics.pipe`.
 """
 
 from __future__ import annotations
@@ -150,7 +150,7 @@ def _bags(pipe: Pipe, hull: dict, breakout: float, g: float, rho: float) -> list
     """The explicit bags of the lift points, each sized from the wet weight it carries."""
     import numpy as np
 
-    from flexlift.structure.pipe import element_sections
+    from flexlift.physics.pipe import element_sections
 
     xs = pipe.lift_positions()
     n, L = pipe.elements, pipe.length_m
@@ -189,7 +189,7 @@ def derive(data: dict) -> dict:
         pipe = Pipe.model_validate(data["pipe"])
     except ValidationError:
         return data
-    from flexlift.structure.pipe import element_sections, hull_section
+    from flexlift.physics.pipe import element_sections, hull_section
 
     env = data.get("environment") or {}
     if not isinstance(env, dict):

@@ -27,7 +27,7 @@ class Hull:
     depth : float — depth D [m]
     density : ndarray (n,) or None — each element's mean density, mass / displaced volume
         [kg/m^3], for its wet weight; None: the whole mass is steel (the environment's steel
-        density). A pipe's comes from its section (:mod:`flexlift.structure.pipe`).
+        density). A pipe's comes from its section (:mod:`flexlift.physics.pipe`).
     """
 
     length: float
@@ -169,7 +169,7 @@ def hull_from_scenario(scenario, elements: int | None = None) -> Hull:
         pm[p.node - 1] += p.mass_t * C.TONNE
     rho = None
     if getattr(scenario, "pipe", None) is not None:
-        from flexlift.structure.pipe import element_density
+        from flexlift.physics.pipe import element_density
 
         rho = element_density(scenario.pipe, scenario.environment.seawater_density_kg_m3)
     hull = Hull(h.length_m, EI, m, pm, breadth=h.breadth_m, depth=h.depth_m, density=rho)
