@@ -229,8 +229,8 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     rho_s = env.steel_density_kg_m3
     el = hull.element_of(xs)
     strip_gen = (psi_s * ws[:, None]).T  # (m, ns)
-    weight_gen = -(strip_gen @ hydro.submerged_weight(hull.mass_per_length[el], g, rho, rho_s)
-                   + modes.displacement.T @ hydro.submerged_weight(hull.point_masses, g, rho, rho_s))
+    weight_gen = -(strip_gen @ hull.wet_weight_per_length(g, rho, rho_s)[el]
+                   + modes.displacement.T @ hull.point_wet_weights(g, rho, rho_s))
     sb = scenario.seabed
     stern, bow = (sb.stern_ratio, sb.bow_ratio) if sb.holding_shape == "linear" else (1.0, 1.0)
     hold_s = seabed.holding_shape(xs, hull.length, stern, bow)

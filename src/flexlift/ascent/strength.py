@@ -55,11 +55,12 @@ class _Grid:
     @classmethod
     def of(cls, plant, xe: np.ndarray) -> _Grid:
         a, hull = plant.arrays, plant.hull
-        m = hull.mass_per_length[hull.element_of(xe)]
+        el = hull.element_of(xe)
+        m = hull.mass_per_length[el]
         xs = plant.strip_x
         return cls(plant.modes.shape_at(xe)[:, : a.nr],
-                   hydro.submerged_weight(m, plant.gravity, plant.seawater_density,
-                                          plant.steel_density),
+                   hull.wet_weight_per_length(plant.gravity, plant.seawater_density,
+                                              plant.steel_density)[el],
                    m + plant.mass_line, np.interp(xe, xs, a.strip_drag),
                    np.interp(xe, xs, a.strip_k), np.interp(xe, xs, a.strip_c),
                    seabed.holding_shape(xe, hull.length, *plant.hold_stern_bow))

@@ -20,7 +20,7 @@ import numpy as np
 from flexlift import constants as C
 from flexlift.errors import InputError
 from flexlift.loads import balance
-from flexlift.physics.hydro import sphere_diameter, submerged_weight
+from flexlift.physics.hydro import sphere_diameter
 from flexlift.structure.hull import Hull
 from flexlift.structure.modes import Modes, compute_modes, mode_nodes
 
@@ -63,6 +63,8 @@ class LiftPlan:
     gravity: float = C.G  # [m/s^2]
     warnings: tuple[str, ...] = ()
     layout: str = "explicit"  # "balanced", "mode_nodes" or "explicit" (lift.bags)
+    seawater_density: float = C.RHO_SEAWATER  # [kg/m^3], for the wet weight along the hull
+    steel_density: float = C.RHO_STEEL  # [kg/m^3]
 
     def holding_lifts(self) -> np.ndarray:
         """Each bag's lift while it holds the structure through the ascent [N] (SPEC §5): the
@@ -140,11 +142,11 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
     lift = scenario.lift
     g, rho = env.gravity_m_s2, env.seawater_density_kg_m3
     dry = hull.total_mass * g
-    wet = float(submerged_weight(hull.total_mass, g, rho, env.steel_density_kg_m3))
+    wet = hull.total_wet_weight(g, rho, env.steel_density_kg_m3)
     if not wet > 0:
-        raise InputError("environment.steel_density_kg_m3", env.steel_density_kg_m3,
-                         f"the structure floats (wet weight {wet / (C.TONNE * g):.0f} t): a steel "
-                         f"denser than the seawater's {rho:g} kg/m3 is needed, or nothing is lifted")
+        raise InputError("hull", f"wet weight {wet / (C.TONNE * g):.0f} t",
+                         "the structure floats in seawater: nothing to lift; check its masses, "
+                         "densities and contents")
     required = lift.breakout_factor * wet
     cat = lift.catalogue_bag.lift_t * C.TONNE * g
     n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)
@@ -169,7 +171,8 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
         bags = external + internal
     plan = LiftPlan(dry_weight=dry, wet_weight=wet, breakout_factor=lift.breakout_factor,
                     required_lift=required, catalogue_lift=cat, bag_lift=per, bags=tuple(bags),
-                    gravity=g, layout=layout)
+                    gravity=g, layout=layout, seawater_density=rho,
+                    steel_density=env.steel_density_kg_m3)
     warnings = []
     if plan.shortfall > 0:
         short_t = plan.shortfall / (C.TONNE * g)
@@ -218,8 +221,8 @@ def _balanced_layout(scenario, hull: Hull, n_ext: int, per: float, internal: lis
     spans = [b.span for b in internal]
     lifts = [b.lift for b in internal]
     x, q, points = balance.design_load(
-        hull, submerged_weight(hull.mass_per_length, g, rho, rho_s),
-        submerged_weight(hull.point_masses, g, rho, rho_s), spans, lifts, 1.0)
+        hull, hull.wet_weight_per_length(g, rho, rho_s),
+        hull.point_wet_weights(g, rho, rho_s), spans, lifts, 1.0)
     start = balance.equal_share_positions(x, q, points, n_ext)
     load = np.trapezoid(q, x) + sum(F for _, F in points)
     moment = np.trapezoid(q * x, x) + sum(F * xp for xp, F in points)

@@ -225,6 +225,8 @@ def lift_load_case(
     wet_ratio = plan.wet_weight / plan.dry_weight
     g = plan.gravity
     q_el = -k * wet_ratio * g * hull.mass_per_length  # [N/m] per element
+    if hull.density is not None:  # a pipe: each element's own wet weight
+        q_el = -k * hull.wet_weight_per_length(g, plan.seawater_density, plan.steel_density)
     edges = hull.x_nodes
     line: list[LineLoad] = []
     if np.allclose(q_el, q_el[0], rtol=1e-12, atol=0.0):
@@ -234,8 +236,11 @@ def lift_load_case(
             LineLoad(f"weight_e{e + 1}", float(edges[e]), float(edges[e + 1]), float(q))
             for e, q in enumerate(q_el)
         ]
+    pw = k * wet_ratio * g * hull.point_masses
+    if hull.density is not None:
+        pw = k * hull.point_wet_weights(g, plan.seawater_density, plan.steel_density)
     points = [
-        PointLoad(f"weight_n{j + 1}", float(edges[j]), float(-k * wet_ratio * g * m))
+        PointLoad(f"weight_n{j + 1}", float(edges[j]), float(-pw[j]))
         for j, m in enumerate(hull.point_masses)
         if m > 0
     ]

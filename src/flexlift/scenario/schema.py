@@ -38,6 +38,7 @@ from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
 from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
 from flexlift.scenario.messages import first_error, format_error
+from flexlift.scenario.pipe import Pipe, derive
 from flexlift.scenario.types import (
     MAX_BAG_LIFT_T,
     MAX_ELEMENTS,
@@ -432,6 +433,7 @@ class Scenario(_Section):
     description: Annotated[Text, Field(max_length=10_000)] = ""
     environment: Environment = Environment()
     hull: Hull = Hull()
+    pipe: Pipe | None = None  # a pipeline by its section: fills hull, lift.bags (scenario/pipe.py)
     lift: Lift = Lift()
     gas: Gas = Gas()
     seabed: Seabed = Seabed()
@@ -441,6 +443,11 @@ class Scenario(_Section):
     faults: Annotated[list[Fault], Field(max_length=MAX_ITEMS)] = []
     disturbance: Disturbance = Disturbance()
     simulation: Simulation = Simulation()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _pipe(cls, data):
+        return derive(data)
 
     @model_validator(mode="after")
     def _check(self) -> Scenario:

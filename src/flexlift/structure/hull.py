@@ -12,6 +12,7 @@ import numpy as np
 
 from flexlift import constants as C
 from flexlift.errors import InputError
+from flexlift.physics.hydro import submerged_weight
 
 
 @dataclass(frozen=True)
@@ -24,6 +25,9 @@ class Hull:
     point_masses : ndarray (n+1,) — lumped mass at each node [kg]
     breadth : float — breadth B, for drag and added mass [m]
     depth : float — depth D [m]
+    density : ndarray (n,) or None — each element's mean density, mass / displaced volume
+        [kg/m^3], for its wet weight; None: the whole mass is steel (the environment's steel
+        density). A pipe's comes from its section (:mod:`flexlift.physics.pipe`).
     """
 
     length: float
@@ -32,6 +36,7 @@ class Hull:
     point_masses: np.ndarray = field(default=None)  # type: ignore[assignment]
     breadth: float = 12.0
     depth: float = 5.4
+    density: np.ndarray | None = None
 
     def __post_init__(self):
         EI = np.atleast_1d(np.asarray(self.EI, dtype=float))
@@ -55,6 +60,11 @@ class Hull:
         object.__setattr__(self, "EI", EI)
         object.__setattr__(self, "mass_per_length", m)
         object.__setattr__(self, "point_masses", pm)
+        if self.density is not None:
+            rho = np.broadcast_to(np.asarray(self.density, dtype=float), EI.shape).copy()
+            if not np.all(np.isfinite(rho)) or np.any(rho <= 0):
+                raise InputError("hull density", rho.min(), "must be positive [kg/m^3]")
+            object.__setattr__(self, "density", rho)
 
     # ------------------------------------------------------------------ constructors
     @classmethod
@@ -100,6 +110,23 @@ class Hull:
         """0-based index of the node nearest to position ``x`` [m]."""
         return int(np.clip(np.rint(x / self.element_length), 0, self.n_elements))
 
+    # ------------------------------------------------------------------ wet weight
+    def wet_weight_per_length(self, g: float, rho_water: float, rho_steel: float) -> np.ndarray:
+        """Submerged weight of each element per length [N/m], downward positive: the hull's
+        mass less the buoyancy of its own volume (steel unless ``density`` says otherwise)."""
+        rho = rho_steel if self.density is None else self.density
+        return submerged_weight(self.mass_per_length, g, rho_water, rho)
+
+    def point_wet_weights(self, g: float, rho_water: float, rho_steel: float) -> np.ndarray:
+        """Submerged weight of the point masses [N] (treated as steel)."""
+        return submerged_weight(self.point_masses, g, rho_water, rho_steel)
+
+    def total_wet_weight(self, g: float, rho_water: float, rho_steel: float) -> float:
+        """W' of the whole structure with its point masses [N]."""
+        q = self.wet_weight_per_length(g, rho_water, rho_steel)
+        return float(np.sum(q) * self.element_length
+                     + np.sum(self.point_wet_weights(g, rho_water, rho_steel)))
+
     # ------------------------------------------------------------------ derived copies
     def refined(self, elements: int) -> Hull:
         """The same beam on ``elements`` equal elements (properties sampled at element centres;
@@ -113,7 +140,9 @@ class Hull:
         for x, mass in zip(self.x_nodes, self.point_masses):
             if mass:
                 pm[int(np.clip(np.rint(x / (self.length / n)), 0, n))] += mass
-        return replace(self, EI=self.EI[idx], mass_per_length=self.mass_per_length[idx], point_masses=pm)
+        rho = None if self.density is None else self.density[idx]
+        return replace(self, EI=self.EI[idx], mass_per_length=self.mass_per_length[idx],
+                       point_masses=pm, density=rho)
 
     def mirrored(self) -> Hull:
         """The beam turned end for end (bow becomes stern)."""
@@ -122,6 +151,7 @@ class Hull:
             EI=self.EI[::-1].copy(),
             mass_per_length=self.mass_per_length[::-1].copy(),
             point_masses=self.point_masses[::-1].copy(),
+            density=None if self.density is None else self.density[::-1].copy(),
         )
 
 
@@ -137,7 +167,12 @@ def hull_from_scenario(scenario, elements: int | None = None) -> Hull:
     pm = np.zeros(n + 1)
     for p in h.point_masses:
         pm[p.node - 1] += p.mass_t * C.TONNE
-    hull = Hull(h.length_m, EI, m, pm, breadth=h.breadth_m, depth=h.depth_m)
+    rho = None
+    if getattr(scenario, "pipe", None) is not None:
+        from flexlift.physics.pipe import element_density
+
+        rho = element_density(scenario.pipe, scenario.environment.seawater_density_kg_m3)
+    hull = Hull(h.length_m, EI, m, pm, breadth=h.breadth_m, depth=h.depth_m, density=rho)
     if elements is not None and int(elements) != n:
         hull = hull.refined(int(elements))
     return hull
