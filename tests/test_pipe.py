@@ -135,3 +135,16 @@ def test_builtin_pipeline_scenario():
     assert s.pipe is not None and s.hull.elements == 1000 and len(s.lift.bags) == 40
     assert s.lift.breakout_factor == pytest.approx(1 + 500 / 1975.5, rel=1e-3)
     assert all(b.lift_t <= s.lift.catalogue_bag.lift_t for b in s.lift.bags)
+
+
+def test_with_changes_on_a_pipe_derives_the_hull_anew():
+    """Changing a pipe key (as a sweep or a mesh study does) re-derives the hull and the bags."""
+    from flexlift.scenario import load_scenario
+
+    sc = load_scenario("pipeline")
+    fine = sc.with_changes(**{"pipe.elements": 2000})
+    assert fine.hull.elements == 2000 and fine.pipe.elements == 2000
+    assert len(fine.lift.bags) == len(sc.lift.bags)
+    thick = sc.with_changes(**{"pipe.wall_thickness_m": 0.0254})
+    assert thick.hull.bending_stiffness_Nm2 != sc.hull.bending_stiffness_Nm2
+    assert sc.with_changes(**{"control.target_height_m": 70.0}).hull == sc.hull

@@ -228,6 +228,27 @@ def derive(data: dict) -> dict:
     return out
 
 
+def underive(data: dict) -> dict:
+    """``data`` (a dumped scenario) without what :func:`derive` filled in from its pipe, so
+    that a changed pipe key derives them anew (``Scenario.with_changes``)."""
+    if not isinstance(data, dict) or data.get("pipe") is None:
+        return data
+    from flexlift.physics.pipe import hull_section
+
+    pipe = Pipe.model_validate(data["pipe"])
+    rho = (data.get("environment") or {}).get("seawater_density_kg_m3", C.RHO_SEAWATER)
+    out = dict(data)
+    out["hull"] = {k: v for k, v in (data.get("hull") or {}).items()
+                   if k not in hull_section(pipe, rho)}
+    lift = dict(data.get("lift") or {})
+    if pipe.breakout_suction_kN_m is not None:
+        lift.pop("breakout_factor", None)
+    if pipe.lift_points is not None:
+        lift.pop("bags", None)
+    out["lift"] = lift
+    return out
+
+
 def _bag_keys(bags) -> list:
     if not isinstance(bags, list) or not all(isinstance(b, dict) for b in bags):
         return [None]

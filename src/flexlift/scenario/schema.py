@@ -38,7 +38,7 @@ from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
 from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
 from flexlift.scenario.messages import first_error, format_error
-from flexlift.scenario.pipe import Pipe, derive
+from flexlift.scenario.pipe import Pipe, derive, underive
 from flexlift.scenario.types import (
     MAX_BAG_LIFT_T,
     MAX_ELEMENTS,
@@ -490,7 +490,7 @@ class Scenario(_Section):
 
     def with_changes(self, **dotted) -> Scenario:
         """A copy with dotted keys changed, validated: ``s.with_changes(**{"hull.elements": 40})``."""
-        data = self.model_dump(mode="json")
+        data = underive(self.model_dump(mode="json"))  # a pipe's derived keys derived anew
         for key, value in dotted.items():
             node = data
             *path, last = key.split(".")
