@@ -14,6 +14,7 @@ unreachable scheduler, ...); 130 interrupted (the finished cases are kept).
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from pathlib import Path
 
@@ -65,22 +66,31 @@ class _Bar:
 
 
 def _main(args: argparse.Namespace) -> int:
+    from flexlift.cli import Terminated
     from flexlift.sweep import load_spec, run_sweep
     from flexlift.sweep.executors import make_engine
+    from flexlift.sweep.worker import OutsideCases
 
     spec = load_spec(args.spec, yes=args.yes)
     out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{Path(args.spec).stem}"
     engine = make_engine(args.workers, args.scheduler, args.dask_local)
     bar = _Bar(args.quiet, engine.name)
+    quiet_cases = OutsideCases()  # a case's warnings go to its record, not to the terminal
+    handlers = list(logging.getLogger("flexlift").handlers)
+    for h in handlers:
+        h.addFilter(quiet_cases)
     try:
         result = run_sweep(spec, out, engine=engine, progress=bar)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, Terminated) as exc:
         bar.close()
-        sys.stderr.write(f"flexlift sweep: the finished cases are kept in {out}; run the same "
-                         "command again to finish the sweep\n")
-        raise
+        how = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        sys.stderr.write(f"flexlift sweep: {how}; the finished cases are kept in {out}: run "
+                         "the same command again to finish the sweep\n")
+        return 143 if isinstance(exc, Terminated) else 130
     finally:
         bar.close()
+        for h in handlers:
+            h.removeFilter(quiet_cases)
     s = result.summary
     if args.json:
         fp = {c: {k: v[k] for k in ("p", "low", "high")} for c, v in s["failure_probability"].items()}

@@ -122,14 +122,18 @@ class DaskEngine:
     name = "dask"
 
     def __init__(self, scheduler: str | None = None, local_workers: int | None = None,
-                 timeout: float = 10.0, processes: bool = True):
+                 timeout: float | None = None, processes: bool = True):
         try:
             import dask
+            from dask.utils import parse_timedelta
             from distributed import Client, LocalCluster
         except ImportError:
             raise InputError.from_line(
                 "--scheduler/--dask-local need Dask: pip install 'flexlift[dask]'") from None
+        if timeout is None:  # Dask's own setting (DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT)
+            timeout = parse_timedelta(dask.config.get("distributed.comm.timeouts.connect"), "s")
         self.cluster = None
+        where = f"--scheduler {clean(str(scheduler), 80)}" if scheduler else "--dask-local"
         try:
             if scheduler is None:
                 # a worker that dies fails its task at once; the sweep retries it once itself
@@ -140,13 +144,12 @@ class DaskEngine:
                 self.client = Client(self.cluster, timeout=timeout)
             else:
                 self.client = Client(scheduler, timeout=timeout)
-        except (OSError, TimeoutError, ValueError) as exc:
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
             self._close_cluster()
-            where = scheduler or "a LocalCluster"
+            why = clean(str(exc), 140) or type(exc).__name__
             raise InputError.from_line(
-                f"--scheduler {clean(str(where), 80)}: cannot connect "
-                f"({clean(str(exc), 120) or type(exc).__name__}); check the address and that "
-                "the scheduler is running") from None
+                f"{where}: cannot reach the Dask scheduler ({why}); give a running "
+                "scheduler's address such as tcp://host:8786") from None
         threads = sum(self.client.nthreads().values()) or 1
         self.workers = threads
         self.window = 2 * threads
@@ -174,7 +177,13 @@ def make_engine(workers: int | None = None, scheduler: str | None = None,
                 dask_local: int | None = None, **dask_options):
     """The engine the options ask for: Dask with ``scheduler`` or ``dask_local``; else
     :class:`Serial` for ``workers`` 1; else :class:`Processes` (default: every local core)."""
+    if scheduler is not None and dask_local is not None:
+        raise InputError.from_line("--scheduler and --dask-local: give one of them (an existing "
+                                   "cluster, or a local one started here)")
     if scheduler is not None or dask_local is not None:
+        if workers is not None:
+            raise InputError.from_line(f"--workers {workers}: local processes, not for Dask (its "
+                                       "workers are the cluster's; --dask-local N sets them)")
         return DaskEngine(scheduler, dask_local, **dask_options)
     n = local_cores() if workers is None else int(workers)
     if n < 1:

@@ -62,24 +62,29 @@ def cdfs(records: dict, modes, limits: dict):
     return fig
 
 
+#: the headline numbers of the tornado plot
+TORNADO = ("max_ascent_velocity_ms", "max_pitch_deg", "max_bending_moment_MNm")
+
+
 def tornado(headline_sensitivity: dict, mode: str, keys):
-    """Rank correlation of every varied key with the headline numbers of ``mode``: one panel
-    per number, keys sorted by influence; None when nothing could be ranked."""
-    sens = {n: dict(map(tuple, headline_sensitivity.get(mode, {}).get(n, []))) for n in SHOWN}
+    """Rank correlation of every varied key with three headline numbers of ``mode`` (speed,
+    pitch, bending moment), keys sorted by their largest influence; None when nothing could
+    be ranked."""
+    sens = {n: dict(map(tuple, headline_sensitivity.get(mode, {}).get(n, []))) for n in TORNADO}
     sens = {n: s for n, s in sens.items() if s}
     if not sens or not keys:
         return None
-    names = list(sens)[:4]
-    fig, axes = new_figure(1, len(names), figsize=(2.6 * len(names) + 1.8, 0.45 * len(keys) + 1.6),
-                           squeeze=False, sharey=True)
+    names = list(sens)
+    fig, ax = new_figure(1, 1, figsize=(7.5, 0.5 * len(keys) * len(names) / 2 + 1.4))
     order = sorted(keys, key=lambda k: max(abs(sens[n].get(k, 0.0)) for n in names))
     y = np.arange(len(order))
-    for ax, n in zip(axes.flat, names):
+    h = 0.8 / len(names)
+    for j, n in enumerate(names):
         vals = np.array([sens[n].get(k, 0.0) for k in order])
-        ax.barh(y, vals, color=np.where(vals >= 0, "#1f4e79", "#d69e2e"))
-        ax.axvline(0, color="#4a5568", lw=0.8)
-        ax.set_xlim(-1, 1)
-        ax.set_title(SHOWN[n], fontsize=9)
-        ax.set_xlabel("rank correlation")
-    axes.flat[0].set_yticks(y, order)
+        ax.barh(y + (j - (len(names) - 1) / 2) * h, vals, height=h, label=SHOWN[n])
+    ax.axvline(0, color="#4a5568", lw=0.8)
+    ax.set_xlim(-1, 1)
+    ax.set_yticks(y, order)
+    ax.set_xlabel("Spearman rank correlation with the headline number")
+    ax.legend(loc="lower right")
     return fig

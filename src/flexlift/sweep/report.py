@@ -106,7 +106,8 @@ def _influence(summary: dict, mode: str, keys) -> str:
     crits = [c for c, ranked in sens.items() if ranked]
     if not crits:
         return ("<p>No criterion's outcome varied across the cases, so no key can be ranked by "
-                "its influence on failing.</p>")
+                "Spearman's rank correlation with failing; the figure ranks them by their "
+                "influence on the headline numbers.</p>")
     rows = []
     for k in keys:
         cells = []
@@ -129,7 +130,7 @@ def _worst(summary: dict, mode: str, rerun: dict, keys) -> str:
         h = w["headline"]
         failed = ", ".join(w["failed"]) or "none"
         path = rerun.get(w["case"])
-        cmd = (f"<code>flexlift simulate {_e(path)} --control {_e(mode)}</code>" if path else "–")
+        cmd = (f"<code>flexlift run {_e(path)} --control {_e(mode)}</code>" if path else "–")
         rows.append([_e(w["name"]), vals, f'<span class="{"fail" if w["failed"] else "pass"}">{_e(failed)}</span>'
                      + (f"<br>{_e(w['error'])}" if w.get("error") else ""),
                      _num(h.get("max_ascent_velocity_ms")), _num(h.get("max_pitch_deg")), cmd])
@@ -174,7 +175,8 @@ def render_report(result, summary: dict, rerun: dict) -> str:
                   "criterion; lost cases are not counted.</p>",
                   f"<h2>Influence of the keys: {_e(m)} control</h2>", _influence(summary, m, keys),
                   _figure(plots.tornado(summary["headline_sensitivity"], m, keys),
-                          f"Rank correlation of each key with the headline numbers ({m} control)."),
+                          f"Spearman rank correlation of each key with the headline numbers ({m} control): "
+                          "a tornado of the keys' influence."),
                   f"<h2>Worst cases: {_e(m)} control</h2>", _worst(summary, m, rerun, keys)]
     parts += ["<h2>Distributions of the headline numbers</h2>",
               _figure(plots.cdfs(records, spec.controls, limits),

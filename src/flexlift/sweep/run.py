@@ -13,9 +13,8 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures as cf
+import json
 import logging
-import os
-import secrets
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -71,8 +70,7 @@ def failure_message(record: dict) -> str:
     return errs[0] if errs else "failed"
 
 
-def run_sweep(spec: SweepSpec, out, engine=None, progress=None,
-              run_id: str | None = None) -> SweepResult:
+def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
     """Run (or resume) ``spec`` into the folder ``out`` and write its results there.
 
     engine : an engine of :mod:`flexlift.sweep.executors` (default: local processes, one per
@@ -82,11 +80,10 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None,
     from flexlift.sweep.executors import make_engine
 
     t0 = time.perf_counter()
-    run_id = run_id or f"{time.strftime('%Y%m%dT%H%M%S')}-{os.getpid()}-{secrets.token_hex(2)}"
     cases = make_cases(spec)
     names = {c.index: case_name(spec, c.index) for c in cases}
     try:
-        with SweepFolder.open(out, spec, run_id) as folder:
+        with SweepFolder.open(out, spec) as folder:
             records = folder.finished(names)
             skipped = len(records)
             todo = [c for c in cases if c.index not in records]
@@ -95,7 +92,8 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None,
             if engine is None and todo:
                 engine = make_engine()
             if todo:
-                _execute(engine, spec, todo, names, folder, records, run_id, progress)
+                _execute(engine, spec, todo, names, folder, records, folder.inc.run_id,
+                         progress)
             result = SweepResult(spec, folder.path, getattr(engine, "name", "none"), records,
                                  skipped, len(todo), round(time.perf_counter() - t0, 3))
             _write_results(result, cases, names, folder)
@@ -130,8 +128,10 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
             case = inflight.pop(f)
             try:
                 record, datasets = f.result()
-            except Exception as exc:  # the worker itself was lost (never the case's own error)
-                if attempts[case.index] >= 2:
+            except Exception as exc:  # the case never returned (run_case records its errors)
+                if not worker_lost(exc):  # e.g. flexlift cannot be imported on a Dask worker
+                    record, datasets = _broken(case, exc), {}
+                elif attempts[case.index] >= 2:
                     record, datasets = _lost(case, exc), {}
                 else:
                     log.info("case %d: worker lost (%s); retrying it once", case.index, exc)
@@ -139,8 +139,7 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
                     continue
             record.update(values=dict(case.values), noise_seed=case.seed, run_id=run_id,
                           attempts=attempts[case.index])
-            folder.write_case(names[case.index], record, datasets)
-            records[case.index] = record
+            records[case.index] = folder.write_case(names[case.index], record, datasets)
             if progress is not None:
                 progress(len(records), total, _failures(records))
 
@@ -149,6 +148,24 @@ def _submit(engine, spec, case: Case, attempts, inflight) -> None:
     attempts[case.index] += 1
     task = Task(case.index, spec.base, changes(spec, case), spec.controls, spec.keep == "histories")
     inflight[engine.submit(run_case, task)] = case
+
+
+#: how engines report a worker that died under a case (the process killed, the machine lost)
+LOST = ("BrokenProcessPool", "BrokenExecutor", "KilledWorker", "CommClosedError",
+        "CancelledError", "FutureCancelledError")
+
+
+def worker_lost(exc: BaseException) -> bool:
+    """Whether ``exc`` (from a case's future) says its worker died, rather than that the
+    worker could not run the case at all."""
+    return any(t.__name__ in LOST for t in type(exc).__mro__)
+
+
+def _broken(case: Case, exc: Exception) -> dict:
+    """A case its worker could not run (not retried now; a rerun tries it again)."""
+    why = clean(f"{type(exc).__name__}: {exc}", 240)
+    return {"case": case.index, "status": "lost", "results": {}, "warnings": [],
+            "elapsed_s": None, "error": f"lost: the worker could not run the case ({why})"}
 
 
 def _lost(case: Case, exc: Exception) -> dict:
@@ -168,10 +185,11 @@ def _write_results(result: SweepResult, cases, names, folder) -> None:
     attrs = {"title": f"flexlift sweep of {spec.base.name}", "flexlift_version": __version__,
              "spec_checksum": spec.checksum(), "base_checksum": spec.base.checksum(),
              "method": spec.method, "engine": result.engine,
-             "failure_probability": _json(summary["by_control"])}
+             "failure_probability": json.dumps(summary["by_control"])}
     if spec.seed is not None:
         attrs.update(seed=str(spec.seed), samples=int(spec.samples))
     ds = agg.build_dataset(spec, cases, names, records, attrs)
+    folder.claim("results.nc", "summary.json", "report.html")
     with atomic_file(folder.path / "results.nc", suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="scipy")
     rerun = _write_reruns(spec, cases, names, summary, folder)
@@ -179,34 +197,25 @@ def _write_results(result: SweepResult, cases, names, folder) -> None:
     write_text(folder.path / "report.html", render_report(result, summary, rerun))
 
 
-def _json(obj) -> str:
-    import json
-
-    return json.dumps(obj, sort_keys=False)
-
-
 def _write_reruns(spec, cases, names, summary, folder) -> dict[int, str]:
-    """The scenario files of the worst and the failed cases, ``rerun/case_NNNN.yaml``; stale
-    ones of an earlier run of this sweep are removed (they are ours: the folder's pattern)."""
+    """The scenario files of the worst and the failed cases, ``rerun/case_NNNN.yaml``; those
+    of an earlier run of this sweep that are no longer wanted are removed (only files the
+    folder's marker lists as this sweep's)."""
     from flexlift.output.files import write_text
 
     wanted = set()
     for mode_worst in summary["worst"].values():
         wanted |= {w["case"] for w in mode_worst}
     wanted |= {w["case"] for w in summary["failures"][: spec.worst]}
-    folder_r = folder.path / "rerun"
-    out = {}
-    if wanted:
-        folder_r.mkdir(exist_ok=True)
+    out = {i: f"rerun/{names[i]}.yaml" for i in sorted(wanted)}
+    if out:
+        folder.claim("rerun", *out.values())
     by_index = {c.index: c for c in cases}
-    for i in sorted(wanted):
-        rel = f"rerun/{names[i]}.yaml"
+    for i, rel in out.items():
         write_text(folder.path / rel, case_scenario(spec, by_index[i]).to_yaml())
-        out[i] = rel
-    if folder_r.is_dir():
-        for p in folder_r.iterdir():
-            if p.suffix == ".yaml" and p.name.startswith("case_") and f"rerun/{p.name}" not in out.values():
-                p.unlink()
+    for rel in sorted(folder.listed()):
+        if rel.startswith("rerun/") and rel not in out.values() and (folder.path / rel).is_file():
+            (folder.path / rel).unlink()
     return out
 
 

@@ -40,6 +40,7 @@ import typing
 from dataclasses import dataclass
 from pathlib import Path
 
+from flexlift import __version__
 from flexlift.errors import InputError, brief, clean
 from flexlift.scenario import ControlMode, Scenario, builtin_names, load_scenario
 from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
@@ -97,9 +98,11 @@ class SweepSpec:
         return int(self.samples)
 
     def canonical(self) -> dict:
-        """What defines the cases and their results: the base scenario's checksum, the
-        control modes, what is kept and the variations (the checksum is of this)."""
-        return {"base": self.base.checksum(), "controls": list(self.controls), "keep": self.keep,
+        """What defines the cases and their results: flexlift's version, the base scenario's
+        checksum (``set`` applied), the control modes, what is kept and the variations (the
+        checksum is of this; ``worst`` only shapes the report)."""
+        return {"flexlift": __version__, "base": self.base.checksum(),
+                "controls": list(self.controls), "keep": self.keep,
                 "method": self.method, "samples": self.samples, "seed": self.seed,
                 "grid": {k: list(v) for k, v in self.grid.items()},
                 "vary": {k: [d.kind, [list(p) for p in d.params]]

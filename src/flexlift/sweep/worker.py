@@ -22,6 +22,7 @@ from __future__ import annotations
 import logging
 import os
 import socket
+import threading
 import time
 from dataclasses import dataclass
 
@@ -48,14 +49,31 @@ class Task:
 
 
 class _Collect(logging.Handler):
+    """The warnings of one case: those logged by its own thread (a Dask worker may run
+    several cases at once in threads)."""
+
     def __init__(self):
         super().__init__(level=logging.WARNING)
         self.lines: list[str] = []
+        self.thread = threading.get_ident()
 
     def emit(self, record):
+        if record.thread != self.thread:
+            return
         line = clean(record.getMessage(), 300)
         if line not in self.lines and len(self.lines) < MAX_WARNINGS:
             self.lines.append(line)
+
+
+_state = threading.local()
+
+
+class OutsideCases(logging.Filter):
+    """A filter for a terminal's log handler: drops the records a case logs while it runs in
+    this process (``--workers 1``, Dask threads); they are in the case's record instead."""
+
+    def filter(self, record) -> bool:
+        return not getattr(_state, "in_case", False)
 
 
 def run_case(task: Task) -> tuple[dict, dict]:
@@ -64,6 +82,7 @@ def run_case(task: Task) -> tuple[dict, dict]:
     collect = _Collect()
     root = logging.getLogger("flexlift")
     root.addHandler(collect)
+    _state.in_case = True
     record = {"case": task.index, "values": dict(task.changes), "status": "completed",
               "results": {}, "warnings": [], "elapsed_s": None, "pid": os.getpid(),
               "host": socket.gethostname()}
@@ -84,6 +103,7 @@ def run_case(task: Task) -> tuple[dict, dict]:
             if res["status"] != "completed":
                 record["status"] = "failed"
     finally:
+        _state.in_case = False
         root.removeHandler(collect)
         record["warnings"] = collect.lines
         record["elapsed_s"] = round(time.perf_counter() - t0, 4)
@@ -101,9 +121,10 @@ def _failed(msg: str, partial=None) -> dict:
 
 def _one_mode(scenario, mode: str) -> tuple[dict, object]:
     from flexlift.ascent import simulate
+    from flexlift.sweep.plants import plant_for
 
     try:
-        result = simulate(scenario, control=mode)
+        result = simulate(scenario, control=mode, plant=plant_for(scenario, mode))
     except SimulationError as exc:
         partial = exc.partial
         return _failed(clean(str(exc), 300), partial), getattr(partial, "dataset", None)
