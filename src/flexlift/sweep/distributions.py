@@ -63,7 +63,9 @@ class Distribution:
 
     def describe(self) -> str:
         """``normal(mean=1.2, std=0.1, low=0.8)``."""
-        return f"{self.kind}(" + ", ".join(f"{k}={brief(v, 40)}" for k, v in self.params) + ")"
+        order = ["mean", "std", "median", "sigma", "low", "mode", "high", "values", "weights"]
+        params = sorted(self.params, key=lambda kv: order.index(kv[0]))
+        return f"{self.kind}(" + ", ".join(f"{k}={brief(v, 40)}" for k, v in params) + ")"
 
     def ppf(self, u: np.ndarray) -> list:
         """The values at the probabilities ``u`` (each in [0, 1)), as plain Python values."""

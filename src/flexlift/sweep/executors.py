@@ -6,8 +6,8 @@ worker.run_case` and says how many cases it can usefully hold at once (``window`
 - :class:`Serial`: in this process, one after the other (``--workers 1``);
 - :class:`Processes`: a :class:`~concurrent.futures.ProcessPoolExecutor` (the default, one
   worker per core). Workers are started with ``forkserver``: never forked from a parent that
-  holds threads, each has flexlift imported (preloaded in the server) and loads the compiled
-  ascent once, then runs case after case. A worker that dies breaks the pool: every case in
+  holds threads; the server imports flexlift and loads the compiled ascent once
+  (:mod:`.warm`), so each worker starts with both and runs case after case. A worker that dies breaks the pool: every case in
   flight fails with ``BrokenProcessPool``, and the next submission starts a new pool;
 - :class:`DaskEngine`: ``distributed.Client.get_executor()`` on an existing scheduler
   (``--scheduler tcp://host:8786``) or a ``LocalCluster`` started here (``--dask-local N``).
@@ -81,7 +81,8 @@ class Processes:
 
     def _new(self) -> cf.ProcessPoolExecutor:
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["flexlift.sweep.worker", "flexlift.ascent"])
+        # imported (and the compiled ascent loaded) once in the fork server, not per worker
+        ctx.set_forkserver_preload(["flexlift.sweep.worker", "flexlift.sweep.warm"])
         return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
                                       initializer=_init_worker)
 

@@ -79,27 +79,29 @@ def _canonical(v):
 class ReadMemo:
     """Results of a deterministic function of a scenario, each kept with the values of the
     keys its computation read; :meth:`get` returns the result whose keys all hold the same
-    values in ``scenario``, else builds (and keeps) a new one."""
+    values in ``scenario``, else builds (and keeps) a new one. Results are grouped by the
+    set of keys they read (nearly always one set), so a lookup reads each key once."""
 
     def __init__(self, size: int = SIZE):
         self.size = size
-        self._entries: OrderedDict[int, tuple[tuple[str, ...], tuple, object]] = OrderedDict()
+        self._groups: dict[tuple[str, ...], dict] = {}  # keys read -> {their values: result}
+        self._order: OrderedDict[tuple, None] = OrderedDict()  # (keys, values), oldest first
         self._lock = threading.Lock()
-        self._next = 0
         self.hits = self.misses = 0
 
     def get(self, scenario, build):
-        """``build(view)`` -> result, computed on a recording view of ``scenario`` unless a
-        kept result was built from the same values; returns (result, keys it depends on)."""
+        """``build(view)`` -> (result, extra keys), computed on a recording view of
+        ``scenario`` unless a kept result was built from the same values; returns (result,
+        the keys it depends on)."""
         with self._lock:
-            entries = list(self._entries.items())
-        for ident, (keys, values, result) in entries:
-            if all(_value(scenario, k) == v for k, v in zip(keys, values)):
-                with self._lock:
-                    if ident in self._entries:
-                        self._entries.move_to_end(ident)
+            groups = list(self._groups.items())
+        for keys, kept in groups:
+            values = tuple(_value(scenario, k) for k in keys)
+            with self._lock:
+                if values in kept:
+                    self._order.move_to_end((keys, values))
                     self.hits += 1
-                return result, keys
+                    return kept[values], keys
         log: set[str] = set()
         result, extra = build(_Reading(scenario, "", log))
         keys = tuple(sorted(log | set(extra)))
@@ -108,14 +110,23 @@ class ReadMemo:
         values = tuple(_value(scenario, k) for k in keys)
         with self._lock:
             self.misses += 1
-            self._entries[self._next] = (keys, values, result)
-            self._next += 1
-            while len(self._entries) > self.size:
-                self._entries.popitem(last=False)
+            self._groups.setdefault(keys, {})[values] = result
+            self._order[(keys, values)] = None
+            while len(self._order) > self.size:
+                k, v = self._order.popitem(last=False)[0]
+                del self._groups[k][v]
+                if not self._groups[k]:
+                    del self._groups[k]
         return result, keys
+
+    def keys(self) -> list[tuple[str, ...]]:
+        """The sets of keys the kept results were built from."""
+        return list(self._groups)
 
 
 _PLANS, _PLANTS, _PAPER = ReadMemo(), ReadMemo(), ReadMemo()
+#: the dry and wet modes of the plans and plants (:func:`~flexlift.structure.modes.reusing_modes`)
+_MODES: dict = {}
 
 
 def plant_for(scenario, mode: str):
@@ -125,15 +136,20 @@ def plant_for(scenario, mode: str):
     from flexlift.ascent.plant import coupled_plant
     from flexlift.loads.liftplan import plan_lift
     from flexlift.structure.hull import hull_from_scenario
+    from flexlift.structure.modes import reusing_modes
 
-    plan, plan_keys = _PLANS.get(scenario, lambda v: (plan_lift(v, hull_from_scenario(v)), ()))
-    if mode == "paper":
-        return _PAPER.get(scenario, lambda v: (paper_plant(v, coupled_plant(v, plan=plan)),
-                                               plan_keys))[0]
-    return _PLANTS.get(scenario, lambda v: (coupled_plant(v, plan=plan), plan_keys))[0]
+    with reusing_modes(_MODES):
+        plan, plan_keys = _PLANS.get(scenario,
+                                     lambda v: (plan_lift(v, hull_from_scenario(v)), ()))
+        if mode == "paper":
+            return _PAPER.get(scenario, lambda v: (paper_plant(v, coupled_plant(v, plan=plan)),
+                                                   plan_keys))[0]
+        return _PLANTS.get(scenario, lambda v: (coupled_plant(v, plan=plan), plan_keys))[0]
 
 
 def stats() -> dict:
     """Hits and misses of this process's caches (for the benchmark)."""
-    return {name: {"hits": m.hits, "misses": m.misses}
-            for name, m in (("plans", _PLANS), ("plants", _PLANTS), ("paper", _PAPER))}
+    out = {name: {"hits": m.hits, "misses": m.misses}
+           for name, m in (("plans", _PLANS), ("plants", _PLANTS), ("paper", _PAPER))}
+    out["modes_kept"] = len(_MODES)
+    return out

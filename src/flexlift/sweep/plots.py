@@ -10,7 +10,7 @@ import io
 
 import numpy as np
 
-from flexlift.output.plots._style import STYLE, new_figure
+from flexlift.output.plots._style import STYLE
 from flexlift.sweep import aggregate as agg
 
 #: the headline numbers drawn, with their labels (others are listed in the dataset)
@@ -20,6 +20,18 @@ SHOWN = {"max_ascent_velocity_ms": "max ascent velocity [m/s]",
          "gas_used_free_air_m3": "gas used, free air [m3]",
          "separation_time_s": "separation time [s]",
          "end_time_s": "end of the run [s]"}
+
+
+def new_figure(nrows: int, ncols: int, figsize, left: float = 0.08, top: float = 0.97, **kw):
+    """A figure in the house style with a fixed layout (a sweep's report is drawn after every
+    run, and resumed runs redraw it: matplotlib's constrained layout would double its cost)."""
+    import matplotlib.pyplot as plt
+
+    with plt.rc_context(STYLE):
+        fig, axes = plt.subplots(nrows, ncols, figsize=figsize, **kw)
+    fig.subplots_adjust(left=left, right=0.96, bottom=0.12 / nrows ** 0.5, top=top,
+                        wspace=0.3, hspace=0.45)
+    return fig, axes
 
 
 def png(fig) -> bytes:
@@ -75,16 +87,19 @@ def tornado(headline_sensitivity: dict, mode: str, keys):
     if not sens or not keys:
         return None
     names = list(sens)
-    fig, ax = new_figure(1, 1, figsize=(7.5, 0.5 * len(keys) * len(names) / 2 + 1.4))
+    width = max(len(k) for k in keys)
+    height = 0.5 * len(keys) * len(names) / 2 + 1.6
+    fig, ax = new_figure(1, 1, figsize=(7.5, height), left=min(0.55, 0.02 + 0.0115 * width),
+                         top=1 - 0.45 / height)
     order = sorted(keys, key=lambda k: max(abs(sens[n].get(k, 0.0)) for n in names))
     y = np.arange(len(order))
     h = 0.8 / len(names)
     for j, n in enumerate(names):
         vals = np.array([sens[n].get(k, 0.0) for k in order])
-        ax.barh(y + (j - (len(names) - 1) / 2) * h, vals, height=h, label=SHOWN[n])
+        ax.barh(y - (j - (len(names) - 1) / 2) * h, vals, height=h, label=SHOWN[n])
     ax.axvline(0, color="#4a5568", lw=0.8)
     ax.set_xlim(-1, 1)
     ax.set_yticks(y, order)
     ax.set_xlabel("Spearman rank correlation with the headline number")
-    ax.legend(loc="lower right")
+    fig.legend(loc="upper center", ncol=len(names))
     return fig

@@ -171,8 +171,9 @@ def render_report(result, summary: dict, rerun: dict) -> str:
             f"<code>{_e(k)} = {_e(v)}</code>" for k, v in spec.fixed.items()) + ".</p>")
     for m in spec.controls:
         parts += [f"<h2>Probability of failure: {_e(m)} control</h2>", _probabilities(summary, m),
-                  "<p class='meta'>A case whose numerics failed counts as failing every "
-                  "criterion; lost cases are not counted.</p>",
+                  "<p class='meta'>A case whose numerics failed, or whose values do not make a "
+                  "valid scenario (e.g. a lift plan that cannot be laid out), counts as failing "
+                  "every criterion; lost cases are not counted.</p>",
                   f"<h2>Influence of the keys: {_e(m)} control</h2>", _influence(summary, m, keys),
                   _figure(plots.tornado(summary["headline_sensitivity"], m, keys),
                           f"Spearman rank correlation of each key with the headline numbers ({m} control): "
