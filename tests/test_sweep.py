@@ -186,14 +186,19 @@ def test_killed_midway_and_rerun_loses_no_case_and_runs_none_twice(tmp_path):
     spec_file = write_spec(tmp_path / "s.yaml", mc(samples=n))
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "flexlift", "sweep", str(spec_file),
-                             "--workers", "1", "--out", str(out), "--quiet"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                             "--workers", "2", "--out", str(out), "--quiet"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and len(list(out.glob("cases/case_*.json"))) < 3:
-        assert proc.poll() is None, proc.stderr.read().decode()
+        assert proc.poll() is None
         time.sleep(0.01)
+    helpers = _descendants(proc.pid)  # the fork server and the workers
     proc.send_signal(signal.SIGKILL)
     proc.wait(30)
+    deadline = time.monotonic() + 30  # orphaned, the workers end themselves
+    while time.monotonic() < deadline and [p for p in helpers if _running(p)]:
+        time.sleep(0.1)
+    assert len(helpers) >= 3 and not [p for p in helpers if _running(p)]
     first = {p.name: p.read_bytes() for p in out.glob("cases/case_*.json")}
     assert 3 <= len(first) < n, len(first)
     assert read_marker(out)["complete"] is False
@@ -212,6 +217,27 @@ def test_killed_midway_and_rerun_loses_no_case_and_runs_none_twice(tmp_path):
     # the same results as a sweep run in one go
     whole = run_sweep(spec, tmp_path / "whole", engine=Serial())
     assert results(whole) == results(res)
+
+
+def _descendants(pid: int) -> list[int]:
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            kids = Path(f"/proc/{p}/task/{p}/children").read_text().split()
+        except OSError:
+            continue
+        out += [int(k) for k in kids]
+        todo += [int(k) for k in kids]
+    return out
+
+
+def _running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state not in ("Z", "X")
 
 
 def test_interrupted_rerun_of_a_finished_sweep_runs_nothing(tmp_path):

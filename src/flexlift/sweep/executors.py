@@ -25,6 +25,7 @@ import logging
 import multiprocessing
 import os
 import signal
+import threading
 
 from flexlift.errors import InputError, clean
 
@@ -39,15 +40,26 @@ def local_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _init_worker() -> None:
+def _init_worker(alive) -> None:
     """In each local worker: Ctrl-C is the coordinator's to handle; warnings go to the case's
-    record, not to a stray handler."""
+    record, not to a stray handler; and the worker ends when the coordinating process is gone
+    (killed outright, nothing would collect its results): ``alive`` is the reading end of a
+    pipe only the coordinator can write to, which reads as ended once it has died."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_watch, args=(alive,), name="flexlift-watch", daemon=True).start()
     root = logging.getLogger("flexlift")
     root.handlers.clear()
     root.addHandler(logging.NullHandler())
     root.propagate = False
     root.setLevel(logging.WARNING)
+
+
+def _watch(alive) -> None:
+    try:
+        alive.recv_bytes()
+    except (EOFError, OSError):
+        pass
+    os._exit(0)
 
 
 class Serial:
@@ -77,14 +89,15 @@ class Processes:
     def __init__(self, workers: int):
         self.workers = int(workers)
         self.window = 2 * self.workers
+        self._ctx = multiprocessing.get_context("forkserver")
+        # imported (and the compiled ascent loaded) once in the fork server, not per worker
+        self._ctx.set_forkserver_preload(["flexlift.sweep.worker", "flexlift.sweep.warm"])
+        self._alive_r, self._alive_w = self._ctx.Pipe(duplex=False)  # see _init_worker
         self._pool = self._new()
 
     def _new(self) -> cf.ProcessPoolExecutor:
-        ctx = multiprocessing.get_context("forkserver")
-        # imported (and the compiled ascent loaded) once in the fork server, not per worker
-        ctx.set_forkserver_preload(["flexlift.sweep.worker", "flexlift.sweep.warm"])
-        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
-                                      initializer=_init_worker)
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx,
+                                      initializer=_init_worker, initargs=(self._alive_r,))
 
     def submit(self, fn, *args) -> cf.Future:
         """Submit to the pool; a pool broken by a worker that died is replaced first (its
@@ -109,6 +122,9 @@ class Processes:
                     p.join(5)
         else:
             self._pool.shutdown(wait=True)
+        for end in (self._alive_w, self._alive_r):
+            with contextlib.suppress(OSError):
+                end.close()
 
 
 class DaskEngine:
