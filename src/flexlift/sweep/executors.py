@@ -157,7 +157,8 @@ class DaskEngine:
                 with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
                     self.cluster = LocalCluster(n_workers=int(local_workers or local_cores()),
                                                 threads_per_worker=1, processes=processes,
-                                                dashboard_address=None)
+                                                dashboard_address=None,
+                                                silence_logs=logging.ERROR)
                 self.client = Client(self.cluster, timeout=timeout)
             else:
                 self.client = Client(scheduler, timeout=timeout)
