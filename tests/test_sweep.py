@@ -358,6 +358,31 @@ def test_outputs_netcdf_summary_report_and_exact_reruns(tmp_path, capsys):
         record["results"]["coordinated"]["headline"]["max_ascent_velocity_ms"]
 
 
+def test_a_users_fis_controller_is_found_beside_the_spec(tmp_path, tanker):
+    from flexlift.fuzzy.fis import to_fis_text
+    from flexlift.fuzzy.rulebase import supervisor_fis_from
+    from flexlift.scenario import load_scenario
+
+    fis = tmp_path / "ctl" / "mine.fis"
+    fis.parent.mkdir()
+    fis.write_text(to_fis_text(supervisor_fis_from(tanker.control.supervisor)))
+    spec_file = write_spec(tmp_path / "s.yaml", grid(
+        {"control.supervisor.fis_file": [None, "ctl/mine.fis"]}, control=("coordinated",)))
+    elsewhere = tmp_path / "cwd"
+    elsewhere.mkdir()
+    os.chdir(elsewhere)  # the file is found beside the SPEC, not in the working directory
+    try:
+        res = run_sweep(load_spec(spec_file), tmp_path / "o", engine=Serial())
+    finally:
+        os.chdir(tmp_path)
+    assert res.completed == 2
+    built_in, mine = (res.records[i]["results"]["coordinated"]["headline"] for i in (0, 1))
+    assert mine["max_ascent_velocity_ms"] == pytest.approx(built_in["max_ascent_velocity_ms"],
+                                                           abs=1e-3)
+    rerun = load_scenario(tmp_path / "o" / "rerun" / "case_0001.yaml")
+    assert rerun.control.supervisor.fis_file == str(fis.resolve())
+
+
 def test_keep_histories_writes_every_cases_time_histories(tmp_path):
     spec = parse_spec({**mc(samples=2), "keep": "histories"})
     res = run_sweep(spec, tmp_path / "o", engine=Serial())

@@ -24,8 +24,27 @@ import xarray as xr
 Z95 = 1.959963984540054
 ALL = "all_criteria"
 #: units of the headline numbers, by the end of their names
-UNITS = (("_ms", "m/s"), ("_deg", "deg"), ("_MNm", "MN m"), ("_MN", "MN"), ("_m3", "m3"),
-         ("_s", "s"))
+UNITS = (("_ms", "m/s"), ("_deg", "deg"), ("_MNm", "MN m"), ("_MN", "MN"), ("_MPa", "MPa"),
+         ("_m3", "m3"), ("_hours", "h"), ("_s", "s"))
+#: the headline numbers with a limit, and the scenario key of that limit (1: utilisation)
+LIMITED = {"max_ascent_velocity_ms": "limits.ascent_velocity_m_s",
+           "max_descent_velocity_ms": "limits.descent_velocity_m_s",
+           "max_pitch_deg": "limits.pitch_deg", "max_utilisation": None}
+
+
+def limits_of(base, values: dict | None = None) -> dict:
+    """{headline number: its limit} for the base scenario, or for a case of it whose varied
+    ``values`` may include limits (``limits.pitch_deg``, ...)."""
+    values = values or {}
+    out = {}
+    for name, key in LIMITED.items():
+        if key is None:
+            out[name] = 1.0
+        elif key in values:
+            out[name] = float(values[key])
+        else:
+            out[name] = float(getattr(base.limits, key.split(".", 1)[1]))
+    return out
 
 
 def wilson(failed: int, n: int, z: float = Z95) -> dict:
@@ -145,17 +164,20 @@ def headline_sensitivity(records: dict, modes, keys) -> dict:
 
 def severity(result: dict, names: list[str], limits: dict) -> tuple:
     """Sort key of a worst case (larger is worse): numerics failed, criteria failed, then
-    how close the speed and the pitch came to their limits."""
+    how close the speeds, the pitch and the hull stress came to their ``limits``
+    ({headline number: limit}; the nearest counts)."""
     h = result.get("headline", {})
-    margin = sum((h.get(k) or 0.0) / lim for k, lim in limits.items() if lim)
+    margin = max([(h.get(k) or 0.0) / lim for k, lim in limits.items() if lim] or [0.0])
     return (result["status"] != "completed", len(failed_criteria(result, names)), margin)
 
 
-def worst_cases(records: dict, mode: str, n: int, limits: dict) -> list[int]:
-    """The indices of the ``n`` worst cases run in ``mode`` (worst first)."""
+def worst_cases(records: dict, mode: str, n: int, base) -> list[int]:
+    """The indices of the ``n`` worst cases run in ``mode`` (worst first), each against its own
+    limits (those of ``base``, the base scenario, unless the case varies them)."""
     names = criteria_names(records, mode)
     rs = ran(records, mode)
-    rs.sort(key=lambda r: severity(r["results"][mode], names, limits), reverse=True)
+    rs.sort(key=lambda r: severity(r["results"][mode], names, limits_of(base, r["values"])),
+            reverse=True)
     return [r["case"] for r in rs[:n]]
 
 

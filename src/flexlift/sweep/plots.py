@@ -15,11 +15,15 @@ from flexlift.sweep import aggregate as agg
 
 #: the headline numbers drawn, with their labels (others are listed in the dataset)
 SHOWN = {"max_ascent_velocity_ms": "max ascent velocity [m/s]",
+         "max_descent_velocity_ms": "max descent velocity [m/s]",
          "max_pitch_deg": "max pitch [deg]",
+         "max_utilisation": "max hull stress / allowable",
          "max_bending_moment_MNm": "max bending moment [MN m]",
-         "gas_used_free_air_m3": "gas used, free air [m3]",
+         "gas_total_free_air_m3": "gas used in all, free air [m3]",
          "separation_time_s": "separation time [s]",
          "end_time_s": "end of the run [s]"}
+#: the panels of the CDF figure, in order (those the headline has)
+CDF_PANELS = 6
 
 
 def new_figure(nrows: int, ncols: int, figsize, left: float = 0.08, top: float = 0.97, **kw):
@@ -51,7 +55,7 @@ def cdfs(records: dict, modes, limits: dict):
     """Empirical CDFs of the headline numbers, one panel each, one line per control mode,
     with the limit as a dashed line where there is one; None when nothing completed."""
     names = [n for n in SHOWN if any(np.isfinite(agg.headline_array(records, m, n)).any()
-                                     for m in modes)]
+                                     for m in modes)][:CDF_PANELS]
     if not names:
         return None
     cols = 3
@@ -75,12 +79,12 @@ def cdfs(records: dict, modes, limits: dict):
 
 
 #: the headline numbers of the tornado plot
-TORNADO = ("max_ascent_velocity_ms", "max_pitch_deg", "max_bending_moment_MNm")
+TORNADO = ("max_ascent_velocity_ms", "max_pitch_deg", "max_utilisation")
 
 
 def tornado(headline_sensitivity: dict, mode: str, keys):
     """Rank correlation of every varied key with three headline numbers of ``mode`` (speed,
-    pitch, bending moment), keys sorted by their largest influence; None when nothing could
+    pitch, hull stress), keys sorted by their largest influence; None when nothing could
     be ranked."""
     sens = {n: dict(map(tuple, headline_sensitivity.get(mode, {}).get(n, []))) for n in TORNADO}
     sens = {n: s for n, s in sens.items() if s}

@@ -128,17 +128,21 @@ def _worst(summary: dict, mode: str, rerun: dict, keys) -> str:
     for w in worst:
         vals = "<br>".join(f"{_e(k)} = {_num(w['values'].get(k))}" for k in keys)
         h = w["headline"]
-        failed = ", ".join(w["failed"]) or "none"
+        why = [f"{_e(c)}: {_e(w.get('reasons', {}).get(c, 'failed'))}" for c in w["failed"]]
+        failed = "<br>".join(why) or "none"
         path = rerun.get(w["case"])
         cmd = (f"<code>flexlift run {_e(path)} --control {_e(mode)}</code>" if path else "–")
-        rows.append([_e(w["name"]), vals, f'<span class="{"fail" if w["failed"] else "pass"}">{_e(failed)}</span>'
-                     + (f"<br>{_e(w['error'])}" if w.get("error") else ""),
-                     _num(h.get("max_ascent_velocity_ms")), _num(h.get("max_pitch_deg")), cmd])
-    return ("<p>Worst first: numerics failed, then most criteria failed, then closest to the "
-            "speed and pitch limits. Each scenario file reruns its case exactly (it is the "
-            "case as run, every default filled in; <code>flexlift run FILE</code> gives the "
-            "whole analysis).</p>"
-            + _table(["case", "values", "failed", "max ascent velocity [m/s]", "max pitch [deg]",
+        rows.append([_e(w["name"]), vals, f'<span class="{"fail" if w["failed"] else "pass"}">'
+                     f"{failed}</span>" + (f"<br>{_e(w['error'])}" if w.get("error") else ""),
+                     _num(h.get("max_ascent_velocity_ms")), _num(h.get("max_descent_velocity_ms")),
+                     _num(h.get("max_pitch_deg")), _num(h.get("max_utilisation")), cmd])
+    return ("<p>Worst first: numerics failed or an invalid scenario, then most criteria failed, "
+            "then nearest a limit (ascent and descent speed, pitch, hull stress against the "
+            "allowable). Each scenario file reruns its case exactly: it is the case as run, "
+            "every default filled in, and <code>flexlift run FILE --control MODE</code> gives "
+            "the whole analysis with these numbers.</p>"
+            + _table(["case", "values", "failed, and why", "max ascent velocity [m/s]",
+                      "max descent velocity [m/s]", "max pitch [deg]", "max utilisation",
                       "rerun"], rows, left=3))
 
 
@@ -155,8 +159,8 @@ def render_report(result, summary: dict, rerun: dict) -> str:
     """The HTML page of a finished sweep (``rerun``: case index -> its scenario file)."""
     spec, records = result.spec, result.records
     keys = list(spec.keys)
-    lim = spec.base.limits
-    limits = {"max_ascent_velocity_ms": lim.ascent_velocity_m_s, "max_pitch_deg": lim.pitch_deg}
+    limits = {k: v for k, v in agg.limits_of(spec.base).items()
+              if agg.LIMITED[k] not in spec.keys}  # a limit that varies has no one line
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     parts = [f"<h1>Sweep of {_e(spec.base.name)}: {spec.n_cases:,} cases</h1>",
              f'<p class="meta">flexlift {_e(__version__)}, {when}; base {_e(spec.base_ref)} '

@@ -225,16 +225,15 @@ def summarize(result: SweepResult) -> dict:
     modes, keys = spec.controls, spec.keys
     fp = agg.failure_probability(records, modes)
     sens = agg.sensitivity(records, modes, keys)
-    lim = spec.base.limits
-    limits = {"max_ascent_velocity_ms": lim.ascent_velocity_m_s, "max_pitch_deg": lim.pitch_deg}
     one = len(modes) == 1
     flat_fp = {(c if one else f"{m}.{c}"): v for m in modes for c, v in fp[m].items()}
     flat_sens = {(c if one else f"{m}.{c}"): v for m in modes for c, v in sens[m].items()}
     worst = {m: [{"case": i, "name": case_name(spec, i), "values": records[i]["values"],
                   "failed": agg.failed_criteria(records[i]["results"][m], agg.criteria_names(records, m)),
                   "error": records[i]["results"][m].get("error"),
+                  "reasons": records[i]["results"][m].get("reasons", {}),
                   "headline": records[i]["results"][m].get("headline", {})}
-                 for i in agg.worst_cases(records, m, spec.worst, limits)] for m in modes}
+                 for i in agg.worst_cases(records, m, spec.worst, spec.base)] for m in modes}
     failures = [{"case": i, "name": case_name(spec, i), "status": records[i]["status"],
                  "message": failure_message(records[i]), "values": records[i].get("values", {})}
                 for i in sorted(records) if records[i]["status"] != "completed"][:MAX_LISTED]

@@ -147,6 +147,7 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
     base_ref = data.get("base", "tanker")
     base = _base(base_ref, source, folder)
     fixed = _mapping(data.get("set", {}), f"{source}: set")
+    fixed = {k: _path(k, v, folder) for k, v in fixed.items()}
     for k in fixed:
         check_key(k, f"{source}: set")
     if fixed:
@@ -167,6 +168,7 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
                   fixed=fixed, worst=worst)
     if "grid" in data:
         grid = _grid(data["grid"], fixed, f"{source}: grid")
+        grid = {k: tuple(_path(k, v, folder) for v in vs) for k, vs in grid.items()}
         spec = SweepSpec(method="grid", grid=grid, distributions={}, samples=None, seed=None,
                          **common)
         _check_size(spec, yes)
@@ -176,7 +178,8 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
     else:
         mc = _mapping(data["monte_carlo"], f"{source}: monte_carlo")
         _only(mc, MC_KEYS, f"{source}: monte_carlo")
-        samples, seed, method, dists = _monte_carlo(mc, base, fixed, f"{source}: monte_carlo")
+        samples, seed, method, dists = _monte_carlo(mc, base, fixed, f"{source}: monte_carlo",
+                                                    folder)
         spec = SweepSpec(method=method, grid={}, distributions=dists, samples=samples, seed=seed,
                          **common)
         _check_size(spec, yes)
@@ -208,6 +211,14 @@ def _base(ref, source: str, folder: Path | None) -> Scenario:
     if near.exists():
         return load_scenario(near)
     return load_scenario(ref)
+
+
+def _path(key: str, value, folder: Path | None):
+    """A file a key names (``control.supervisor.fis_file``), relative to the SPEC's folder."""
+    if (key.endswith("fis_file") and isinstance(value, str) and folder is not None
+            and not Path(value).is_absolute()):
+        return str((folder / value).resolve())
+    return value
 
 
 def _changed(base: Scenario, changes: dict, where: str) -> Scenario:
@@ -276,7 +287,7 @@ def _spaced(d: dict, where: str, whole: bool) -> list:
     return [int(v) for v in np.rint(vals)] if whole else [float(v) for v in vals]
 
 
-def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str):
+def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path | None = None):
     samples = mc.get("samples")
     if isinstance(samples, bool) or not isinstance(samples, int) or samples <= 0:
         raise InputError(f"{where}.samples", brief(samples, 40), "a whole number >= 1")
@@ -295,6 +306,8 @@ def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str):
     dists: dict[str, Distribution] = {}
     for key, d in vary.items():
         k = _varied(key, fixed, f"{where}.vary")
+        if isinstance(d, dict) and isinstance(d.get("values"), list):
+            d = {**d, "values": [_path(key, v, folder) for v in d["values"]]}
         dist = parse_distribution(k, d, f"{where}.vary")
         ends = dist.values if dist.kind == "choice" else dist.ppf([0.0, 1.0 - 1e-16])
         for v in ends:

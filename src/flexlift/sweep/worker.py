@@ -9,7 +9,8 @@ A record (JSON-ready)::
 
     {"case": 42, "values": {...}, "status": "completed" | "failed",
      "results": {"coordinated": {"status": "completed" | "failed", "error": None | "...",
-                                 "criteria": {...}, "headline": {...}, "events": [...],
+                                 "criteria": {...}, "headline": {...}, "reasons": {...},
+                                 "events": [...],
                                  "scenario_checksum": "..."}},
      "warnings": [...], "elapsed_s": 0.14, "pid": 1234, "host": "..."}
 
@@ -111,8 +112,8 @@ def run_case(task: Task) -> tuple[dict, dict]:
 
 
 def _failed(msg: str, partial=None) -> dict:
-    out = {"status": "failed", "error": msg, "criteria": {}, "headline": {}, "events": [],
-           "scenario_checksum": None}
+    out = {"status": "failed", "error": msg, "criteria": {}, "headline": {}, "reasons": {},
+           "events": [], "scenario_checksum": None}
     if partial is not None:
         out.update(_digest(partial))
         out["criteria"] = {k: False for k in out["criteria"]}
@@ -146,4 +147,5 @@ def _digest(result) -> dict:
             seen.add(e["kind"])
             events.append({"time_s": e["time_s"], "kind": e["kind"], "bag": e["bag"]})
     return {"criteria": dict(result.criteria), "headline": dict(result.headline),
-            "events": events, "scenario_checksum": result.dataset.attrs.get("scenario_checksum")}
+            "reasons": dict(result.reasons), "events": events,
+            "scenario_checksum": result.dataset.attrs.get("scenario_checksum")}
