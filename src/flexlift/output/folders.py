@@ -262,6 +262,10 @@ def output_folder(target: str | os.PathLike, command: str = "run") -> Iterator[P
 _TEMP_TAIL = re.compile(r"\.[a-z0-9_]{8}(\.[a-z0-9]{1,4})$")
 
 
+#: the longest file listing a marker may hold [bytes] (read_marker refuses markers over 1 MB)
+MARKER_LISTING_MAX = 900_000
+
+
 def atomic_leftover(name: str) -> str | None:
     """The name of the file an interrupted :func:`~flexlift.output.files.atomic_file` was
     writing, when ``name`` is one of its hidden temporary files; else None."""
@@ -291,8 +295,14 @@ class Incremental:
             self.listed |= new
             self._marker(complete=False)
 
-    def finish(self) -> None:
+    def finish(self, compact=None) -> None:
+        """Mark the folder complete, listing everything in it; when that list would make the
+        marker too large to be read back (:func:`read_marker`), the paths ``compact(relpath)``
+        selects are left out (the command recognises them by their content; other commands
+        then refuse to replace the folder rather than guess)."""
         self.listed = _contents(self.path) - {MARKER}
+        if compact is not None and sum(len(p) + 8 for p in self.listed) > MARKER_LISTING_MAX:
+            self.listed = {p for p in self.listed if not compact(p)}
         self._marker(complete=True)
 
     def _marker(self, complete: bool) -> None:
