@@ -77,9 +77,21 @@ class OutsideCases(logging.Filter):
         return not getattr(_state, "in_case", False)
 
 
+def _quiet_child() -> None:
+    """In a worker process nobody configured (a Dask worker), flexlift's warnings would reach
+    Python's last-resort handler and the terminal: they belong to the case's record only."""
+    import multiprocessing
+
+    root = logging.getLogger("flexlift")
+    if multiprocessing.parent_process() is not None and not root.handlers:
+        root.addHandler(logging.NullHandler())
+        root.propagate = False
+
+
 def run_case(task: Task) -> tuple[dict, dict]:
     """Run one case; returns (record, {mode: xarray Dataset} when histories are kept)."""
     t0 = time.perf_counter()
+    _quiet_child()
     collect = _Collect()
     root = logging.getLogger("flexlift")
     root.addHandler(collect)
