@@ -393,6 +393,18 @@ def test_a_users_fis_controller_is_found_beside_the_spec(tmp_path, tanker):
     assert rerun.control.supervisor.fis_file == str(fis.resolve())
 
 
+def test_a_pipeline_sweep_varies_the_keys_of_its_pipe_section(tmp_path):
+    spec = parse_spec({"base": "pipeline", "control": ["coordinated"],
+                       "set": {"pipe.elements": 50, "pipe.lift_points.spacing_m": 100.0,
+                               "simulation.retained_flexible_modes": 4},
+                       "grid": {"pipe.coating_thickness_m": [0.05, 0.07]}})
+    res = run_sweep(spec, tmp_path / "o", engine=Serial())
+    assert res.completed == 2
+    gas = [r["results"]["coordinated"]["headline"]["gas_total_free_air_m3"]
+           for r in res.records.values()]
+    assert gas[1] > gas[0]  # a heavier coat: more gas to lift it
+
+
 def test_keep_histories_writes_every_cases_time_histories(tmp_path):
     spec = parse_spec({**mc(samples=2), "keep": "histories"})
     res = run_sweep(spec, tmp_path / "o", engine=Serial())

@@ -1,7 +1,8 @@
 """The dotted keys a sweep may set or vary, found by walking the scenario's pydantic models.
 
-``seabed.breakout_time_s`` names a field of a section; a key stops at the first field that is
-not itself a section (so ``lift.bags`` is one key holding a whole list). Each key carries what
+``seabed.breakout_time_s`` names a field of a section (an optional section too:
+``pipe.wall_thickness_m``); a key stops at the first field that is not itself a section (so
+``lift.bags`` is one key holding a whole list). Each key carries what
 the schema allows: its kind (a real or whole number, a choice among names, a flag, or any other
 value such as a list) and, for numbers, its closed range, which the distributions of a Monte
 Carlo must respect (:mod:`flexlift.sweep.distributions`).
@@ -44,8 +45,13 @@ class Key:
 
 
 def _section(annotation) -> type[BaseModel] | None:
+    """The section a field holds: a model, or an optional one (``pipe: Pipe | None``)."""
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return annotation
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        models = [a for a in typing.get_args(annotation) if a is not type(None)]
+        if len(models) == 1 and isinstance(models[0], type) and issubclass(models[0], BaseModel):
+            return models[0]
     return None
 
 
