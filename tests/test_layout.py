@@ -22,8 +22,10 @@ ALLOWED = {
                "ascent"},
     "stages": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                "ascent", "output"},
+    "sweep": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
+              "ascent", "output", "stages"},
     "cli": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-            "ascent", "output", "stages"},
+            "ascent", "output", "stages", "sweep"},
 }
 TOP = {"constants", "errors", "_jit", "_struct", "__init__", "__main__"}
 #: modules every layer may use (atomic file writes)

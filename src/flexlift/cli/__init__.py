@@ -24,7 +24,7 @@ from flexlift import __version__
 from flexlift.errors import LINE_LIMIT, InputError, SimulationError, clean
 
 #: sub-command modules, in the order of the analysis
-COMMANDS = ("run", "modes", "loads", "statics", "reduce", "fuzzy", "simulate")
+COMMANDS = ("run", "modes", "loads", "statics", "reduce", "fuzzy", "simulate", "sweep")
 
 
 class _Parser(argparse.ArgumentParser):

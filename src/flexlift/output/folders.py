@@ -20,6 +20,13 @@ writes through :func:`output_folder`:
    folder is renamed aside, the new one renamed into place and the old one removed. A failure
    or interruption before that leaves the previous folder exactly as it was.
 
+A command whose output grows piece by piece and must survive an interruption (``sweep``: one
+file per finished case) cannot be built aside and swapped in whole; it writes in place through
+:func:`incremental_folder` instead, under the same rules: the marker is written first
+(``complete: false``, with the command and an ``identity`` saying what is being built), a rerun
+with the same identity continues the folder, and nothing that is neither listed in the marker
+nor recognised by the command as its own (by its content) is ever touched.
+
 Folders get 0777 and files 0666 less the umask (0755 / 0644 usually), not the 0700 / 0600 of
 bare temporary files. Locking uses ``fcntl`` (Linux, macOS).
 """
@@ -32,6 +39,7 @@ import fcntl
 import json
 import logging
 import os
+import re
 import secrets
 import shutil
 import time
@@ -246,3 +254,146 @@ def output_folder(target: str | os.PathLike, command: str = "run") -> Iterator[P
                 raise
     except OSError as exc:
         raise _write_error(shown, exc) from None
+
+
+# --------------------------------------------------------------------------- written in place
+#: hidden temporary file of :func:`flexlift.output.files.atomic_file` for the file NAME:
+#: ``.NAME.<8 characters of mkstemp>`` and its suffix
+_TEMP_TAIL = re.compile(r"\.[a-z0-9_]{8}(\.[a-z0-9]{1,4})$")
+
+
+#: the longest file listing a marker may hold [bytes] (read_marker refuses markers over 1 MB)
+MARKER_LISTING_MAX = 900_000
+
+
+def atomic_leftover(name: str) -> str | None:
+    """The name of the file an interrupted :func:`~flexlift.output.files.atomic_file` was
+    writing, when ``name`` is one of its hidden temporary files; else None."""
+    if not name.startswith("."):
+        return None
+    m = _TEMP_TAIL.search(name)
+    return name[1:m.start()] if m and m.start() > 1 else None
+
+
+class Incremental:
+    """A folder being written in place (:func:`incremental_folder`).
+
+    path : the folder; listed : the files the marker lists as this command's (relative POSIX
+    paths, kept across reruns). :meth:`claim` lists files before they are written (so that a
+    kill halfway leaves only files the next run knows as its own); :meth:`finish` marks the
+    folder complete, listing everything in it.
+    """
+
+    def __init__(self, final: Path, shown: str, command: str, identity: str, run_id: str,
+                 listed: set[str]):
+        self.path, self.shown, self.command = final, shown, command
+        self.identity, self.run_id, self.listed = identity, run_id, set(listed)
+
+    def claim(self, *relpaths: str) -> None:
+        new = set(relpaths) - self.listed
+        if new:
+            self.listed |= new
+            self._marker(complete=False)
+
+    def finish(self, compact=None) -> None:
+        """Mark the folder complete, listing everything in it; when that list would make the
+        marker too large to be read back (:func:`read_marker`), the paths ``compact(relpath)``
+        selects are left out (the command recognises them by their content; other commands
+        then refuse to replace the folder rather than guess)."""
+        self.listed = _contents(self.path) - {MARKER}
+        if compact is not None and sum(len(p) + 8 for p in self.listed) > MARKER_LISTING_MAX:
+            self.listed = {p for p in self.listed if not compact(p)}
+        self._marker(complete=True)
+
+    def _marker(self, complete: bool) -> None:
+        write_json(self.path / MARKER, {**_marker(self.run_id, self.command, complete,
+                                                  self.listed), "identity": self.identity})
+
+
+def _check_place(final: Path, shown: str) -> None:
+    cwd = Path.cwd().resolve()
+    if final == cwd or cwd.is_relative_to(final):
+        raise _refuse(shown, "is the current folder (or holds it); choose a sub-folder")
+    if final.is_symlink():
+        raise _refuse(shown, "is a symbolic link; give the folder itself or a new name")
+    if final.exists() and not final.is_dir():
+        raise _refuse(shown, "is a file, not a folder; choose a new or empty folder")
+
+
+def _check_own(inc: Incremental, owns, previous: dict) -> list[Path]:
+    """Refuse a folder holding anything the command did not write; its temporary leftovers
+    (files of an atomic write of one of its own files, cut short by a kill) are returned."""
+    shown, command = inc.shown, inc.command
+    if previous.get("command") != command:
+        other = str(previous.get("command"))[:20]
+        raise _refuse(shown, f"holds the output of `flexlift {other}`, not of `flexlift "
+                             f"{command}`; choose another --out")
+    if previous.get("identity") != inc.identity:
+        raise _refuse(shown, f"holds another `flexlift {command}` (its input differs); rerun "
+                             "with the input it was started with to continue it, or choose "
+                             "another --out")
+    temps = []
+    for p in sorted(_contents(inc.path) - {MARKER}):
+        full = inc.path / p
+        kind_ok = full.is_dir() or full.is_file()
+        if not full.is_symlink() and kind_ok and (p in inc.listed or owns(p, full)):
+            continue
+        parent, _, name = p.rpartition("/")
+        target = atomic_leftover(name)
+        sibling = f"{parent}/{target}" if parent else target
+        if (target and full.is_file() and not full.is_symlink()
+                and (sibling in inc.listed or owns(sibling, None))):
+            temps.append(full)
+            continue
+        raise _refuse(shown, f"holds {p[:60]!r}, which flexlift did not write; move it away "
+                             "or choose another --out")
+    return temps
+
+
+@contextlib.contextmanager
+def incremental_folder(target: str | os.PathLike, command: str, identity: str,
+                       owns=lambda rel, path: False) -> Iterator[Incremental]:
+    """Open ``target`` to be written in place by ``command``, piece by piece (module docstring).
+
+    identity : what the folder is the output of (e.g. a checksum of the input); a folder of
+        the same command and identity is continued, any other refused
+    owns : ``owns(relpath, path)`` is True for a file the command recognises as its own by its
+        content though the marker does not list it (``path`` None: by its name alone, for a
+        temporary leftover of it)
+
+    The folder is locked while open (a second run is refused). Nothing is removed but the
+    temporary leftovers of the command's own atomic writes; an exception leaves everything
+    written so far, with the marker saying ``complete: false`` (other commands refuse such a
+    folder; a rerun of the same command and identity continues it).
+    """
+    shown = os.fspath(target)
+    final = Path(os.path.abspath(shown))
+    _check_place(final, shown)
+    run_id = f"{time.strftime('%Y%m%dT%H%M%S')}-{os.getpid()}-{secrets.token_hex(2)}"
+    try:
+        final.parent.mkdir(parents=True, exist_ok=True)
+        with _locked(final, shown):
+            _check_place(final, shown)
+            previous, temps = {}, []
+            if final.exists() and os.listdir(final):
+                previous = read_marker(final)
+                if previous is None:
+                    raise _refuse(shown, f"holds files flexlift did not write (no {MARKER} "
+                                         "marker); choose a new or empty folder")
+            listed = {p for p in previous.get("files", []) if isinstance(p, str)}
+            inc = Incremental(final, shown, command, identity, run_id, listed)
+            if previous:
+                temps = _check_own(inc, owns, previous)
+            final.mkdir(mode=0o700, exist_ok=True)
+            os.chmod(final, dir_mode())
+            for t in temps:
+                with contextlib.suppress(OSError):
+                    t.unlink()
+            inc.listed = {p for p in inc.listed if (final / p).exists()}
+            inc._marker(complete=False)
+            yield inc
+    except OSError as exc:
+        what = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        reason = exc.strerror or errno.errorcode.get(exc.errno or 0, str(exc))
+        raise _refuse(shown, f"could not be written: {reason}{what}; what was finished is kept "
+                             "(free some space or check the permissions, then rerun)") from None

@@ -8,7 +8,10 @@ flexible modes are solved in their M-orthogonal complement.
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import logging
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -163,6 +166,48 @@ def compute_modes(
     result keeps the number asked for.
     """
     beam = hull if isinstance(hull, Beam) else assemble(hull)
+    store = getattr(_reuse, "store", None)
+    if store is None:
+        return _compute_modes(beam, n_modes, solver)
+    key = _beam_key(beam, n_modes, solver)
+    if key not in store:
+        store[key] = _compute_modes(beam, n_modes, solver)
+        while len(store) > REUSE_SIZE:
+            store.pop(next(iter(store)))
+    return store[key]
+
+
+#: most modes kept by :func:`reusing_modes` per store
+REUSE_SIZE = 8
+_reuse = threading.local()
+
+
+@contextlib.contextmanager
+def reusing_modes(store: dict):
+    """Within the block (in this thread), :func:`compute_modes` returns the modes it already
+    computed into ``store`` for the same beam (the same K, M and hull, bit for bit), the same
+    count and solver, instead of solving again: the modes of a sweep's cases that change only
+    loads, control or seabed are solved once per worker. The solvers are deterministic, so
+    the result is what a new solve gives; it is shared, so treat it as read only (as every
+    caller in flexlift does)."""
+    previous = getattr(_reuse, "store", None)
+    _reuse.store = store
+    try:
+        yield store
+    finally:
+        _reuse.store = previous
+
+
+def _beam_key(beam: Beam, n_modes, solver: str) -> str:
+    h = hashlib.sha256(repr((n_modes, solver, beam.K.shape, beam.hull.length, beam.hull.breadth,
+                             beam.hull.depth)).encode())
+    for a in (beam.K.data, beam.K.indices, beam.K.indptr, beam.M.data, beam.M.indices,
+              beam.M.indptr, beam.hull.EI, beam.hull.mass_per_length, beam.hull.point_masses):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def _compute_modes(beam: Beam, n_modes: int | None, solver: str) -> Modes:
     n_dof = beam.n_dof
     if n_modes is None:
         large = beam.hull.n_elements > LARGE_MODEL_ELEMENTS

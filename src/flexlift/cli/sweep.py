@@ -1,0 +1,120 @@
+"""``flexlift sweep SPEC.yaml``: a grid or a Monte Carlo of ascents of one base scenario, on
+every local core (default), in this process (``--workers 1``) or on a Dask cluster.
+
+The output folder (default ``flexlift-out/sweep-<SPEC name>``) keeps every case as it
+finishes: run the same command again after an interruption and only the missing cases run.
+It ends with ``results.nc`` (a ``case`` dimension, the varied keys as coordinates),
+``summary.json`` and ``report.html``.
+
+Exit codes: 0 the sweep ran (criteria failing are results, not errors); 1 every case failed
+(the most common failure is printed); 2 bad input (an unknown key, a bad distribution, an
+unreachable scheduler, ...); 130 interrupted (the finished cases are kept).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from flexlift.cli._common import add_json_arg, emit_json, positive_int
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("sweep", help="a grid or Monte Carlo of ascents: probability of a safe lift",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("spec", help="the SPEC file (YAML: base, control, set, grid or monte_carlo)")
+    p.add_argument("--workers", type=positive_int("--workers"), default=None,
+                   help="local worker processes (default: every core; 1: in this process)")
+    dask = p.add_mutually_exclusive_group()
+    dask.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                      help="run on the Dask cluster of this scheduler, e.g. tcp://host:8786")
+    dask.add_argument("--dask-local", metavar="N", type=positive_int("--dask-local"), default=None,
+                      help="start a Dask LocalCluster of N workers and run on it")
+    p.add_argument("--out", type=Path, default=None,
+                   help="output folder (default: flexlift-out/sweep-<SPEC name>); rerun with the "
+                        "same SPEC and --out to resume")
+    p.add_argument("--yes", action="store_true",
+                   help="allow a very large sweep (more than 100,000 cases)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_json_arg(p)
+    p.set_defaults(func=_main)
+
+
+class _Bar:
+    """A tqdm bar on stderr: cases done, failures so far, the rate and the time left."""
+
+    def __init__(self, quiet: bool, engine: str):
+        self.quiet, self.engine, self.bar = quiet, engine, None
+
+    def __call__(self, done: int, total: int, failed: int) -> None:
+        if self.quiet:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, initial=done, unit="case", file=sys.stderr,
+                            desc=f"sweep ({self.engine})", dynamic_ncols=True, smoothing=0.05,
+                            mininterval=0.5)
+        self.bar.update(done - self.bar.n)
+        self.bar.set_postfix_str(f"{failed} failed", refresh=False)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _main(args: argparse.Namespace) -> int:
+    from flexlift.cli import Terminated
+    from flexlift.sweep import load_spec, run_sweep
+    from flexlift.sweep.executors import make_engine
+    from flexlift.sweep.worker import OutsideCases
+
+    spec = load_spec(args.spec, yes=args.yes)
+    out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{Path(args.spec).stem}"
+    engine = make_engine(args.workers, args.scheduler, args.dask_local)
+    bar = _Bar(args.quiet, engine.name)
+    quiet_cases = OutsideCases()  # a case's warnings go to its record, not to the terminal
+    handlers = list(logging.getLogger("flexlift").handlers)
+    for h in handlers:
+        h.addFilter(quiet_cases)
+    try:
+        result = run_sweep(spec, out, engine=engine, progress=bar)
+    except (KeyboardInterrupt, Terminated) as exc:
+        bar.close()
+        how = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        sys.stderr.write(f"flexlift sweep: {how}; the finished cases are kept in {out}: run "
+                         "the same command again to finish the sweep\n")
+        return 143 if isinstance(exc, Terminated) else 130
+    finally:
+        bar.close()
+        for h in handlers:
+            h.removeFilter(quiet_cases)
+    s = result.summary
+    if args.json:
+        fp = {c: {k: v[k] for k in ("p", "low", "high")} for c, v in s["failure_probability"].items()}
+        emit_json({"cases": s["cases"], "completed": s["completed"], "failed": s["failed"],
+                   "engine": s["engine"], "failure_probability": fp,
+                   "sensitivity": s["sensitivity"], "out": s["out"]})
+    elif not args.quiet:
+        _print_summary(s, out)
+    if result.completed == 0 and s["cases"] > 0:
+        msg, n = result.most_common_failure() or ("?", 0)
+        sys.stderr.write(f"flexlift sweep: every case failed; the most common failure "
+                         f"({n} of {s['cases']}): {msg}\n")
+        return 1
+    return 0
+
+
+def _print_summary(s: dict, out: Path) -> None:
+    lines = [f"{s['cases']} cases: {s['completed']} completed, {s['failed']} failed "
+             f"({s['lost']} lost); {s['skipped']} were already finished; {s['elapsed_s']:.1f} s "
+             f"on {s['engine']}"]
+    for mode, fp in s["by_control"].items():
+        w = fp["all_criteria"]
+        if w["n"]:
+            lines.append(f"{mode}: probability of failing any criterion {w['p']:.3g} "
+                         f"(95 % {w['low']:.3g}-{w['high']:.3g}, {w['failed']} of {w['n']})")
+    lines.append(f"report: {out / 'report.html'}")
+    sys.stdout.write("\n".join(lines) + "\n")

@@ -1,0 +1,248 @@
+"""What a sweep's cases add up to: failure probabilities, influences, the dataset, the worst.
+
+- **Failure probability** of each criterion (and of ``all_criteria``, the lift being unsafe in
+  any way) per control mode: failed cases / cases run, with the 95 % Wilson score interval.
+  A mode whose numerics failed counts as failing every criterion (that the lift was safe is
+  not known); a lost case (its worker died twice) counts in neither.
+- **Influence** of each varied key: Spearman's rank correlation between the key's values and
+  a criterion's failure (1 failed, 0 passed), or a headline number, over the cases run;
+  ranked by its magnitude. Keys whose values do not vary, and criteria whose outcome does not
+  vary, have no ranking. Keys holding names (a choice of ``lift.layout``) rank in the order
+  of their values' first appearance.
+- **Dataset**: a ``case`` dimension (and ``control``) with the varied keys as coordinates.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import xarray as xr
+
+#: z of a two-sided 95 % interval
+Z95 = 1.959963984540054
+ALL = "all_criteria"
+#: units of the headline numbers, by the end of their names
+UNITS = (("_ms", "m/s"), ("_deg", "deg"), ("_MNm", "MN m"), ("_MN", "MN"), ("_MPa", "MPa"),
+         ("_m3", "m3"), ("_hours", "h"), ("_s", "s"))
+#: the headline numbers with a limit, and the scenario key of that limit (1: utilisation)
+LIMITED = {"max_ascent_velocity_ms": "limits.ascent_velocity_m_s",
+           "max_descent_velocity_ms": "limits.descent_velocity_m_s",
+           "max_pitch_deg": "limits.pitch_deg", "max_utilisation": None}
+
+
+def limits_of(base, values: dict | None = None) -> dict:
+    """{headline number: its limit} for the base scenario, or for a case of it whose varied
+    ``values`` may include limits (``limits.pitch_deg``, ...)."""
+    values = values or {}
+    out = {}
+    for name, key in LIMITED.items():
+        if key is None:
+            out[name] = 1.0
+        elif key in values:
+            out[name] = float(values[key])
+        else:
+            out[name] = float(getattr(base.limits, key.split(".", 1)[1]))
+    return out
+
+
+def wilson(failed: int, n: int, z: float = Z95) -> dict:
+    """The failure probability ``failed / n`` and its Wilson score interval."""
+    if n <= 0:
+        return {"p": None, "low": None, "high": None, "failed": failed, "n": n}
+    p = failed / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z / denom * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    low = 0.0 if failed == 0 else max(0.0, centre - half)
+    high = 1.0 if failed == n else min(1.0, centre + half)
+    return {"p": p, "low": low, "high": high, "failed": failed, "n": n}
+
+
+def spearman(x, y) -> float | None:
+    """Spearman's rank correlation (average ranks for ties); None when either is constant."""
+    from scipy.stats import rankdata
+
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if x.size < 3 or np.ptp(x) == 0 or np.ptp(y) == 0:
+        return None
+    rx, ry = rankdata(x), rankdata(y)
+    rx, ry = rx - rx.mean(), ry - ry.mean()
+    return float(np.dot(rx, ry) / math.sqrt(np.dot(rx, rx) * np.dot(ry, ry)))
+
+
+# --------------------------------------------------------------------------- outcomes
+def ran(records: dict, mode: str) -> list[dict]:
+    """The records whose case ran this mode (completed or failed, not lost), by case."""
+    return [records[i] for i in sorted(records)
+            if records[i]["status"] != "lost" and mode in records[i].get("results", {})]
+
+
+def criteria_names(records: dict, mode: str) -> list[str]:
+    """Every criterion any completed case reported, in order of first appearance."""
+    names: dict[str, None] = {}
+    for r in ran(records, mode):
+        names.update(dict.fromkeys(r["results"][mode].get("criteria", {})))
+    return list(names)
+
+
+def failed_criteria(result: dict, names: list[str]) -> list[str]:
+    """The criteria a mode's result failed (all of them when its numerics failed)."""
+    if result["status"] != "completed":
+        return list(names)
+    return [c for c in names if not result["criteria"].get(c, False)]
+
+
+def failure_probability(records: dict, modes) -> dict:
+    """{mode: {criterion: wilson(...)}}, with ``all_criteria`` last."""
+    out = {}
+    for mode in modes:
+        rs, names = ran(records, mode), criteria_names(records, mode)
+        fails = [failed_criteria(r["results"][mode], names) for r in rs]
+        out[mode] = {c: wilson(sum(c in f for f in fails), len(rs)) for c in names}
+        out[mode][ALL] = wilson(sum(bool(f) or not names for f in fails), len(rs))
+    return out
+
+
+def numeric(values: list) -> np.ndarray:
+    """Values of a key as numbers for ranking (names in order of first appearance)."""
+    if all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
+        return np.asarray(values, dtype=float)
+    codes: dict[str, int] = {}
+    return np.asarray([codes.setdefault(json.dumps(v, sort_keys=True), len(codes))
+                       for v in values], dtype=float)
+
+
+def _ranked(scores: dict) -> list[list]:
+    items = [(k, s) for k, s in scores.items() if s is not None]
+    return [[k, round(s, 4)] for k, s in sorted(items, key=lambda kv: -abs(kv[1]))]
+
+
+def sensitivity(records: dict, modes, keys) -> dict:
+    """{mode: {criterion: [[key, rank correlation with failing], ...]}}, strongest first."""
+    out = {}
+    for mode in modes:
+        rs, names = ran(records, mode), criteria_names(records, mode)
+        fails = [failed_criteria(r["results"][mode], names) for r in rs]
+        xs = {k: numeric([r["values"][k] for r in rs]) for k in keys}
+        out[mode] = {}
+        for c in [*names, ALL]:
+            y = [float(bool(f)) if c == ALL else float(c in f) for f in fails]
+            out[mode][c] = _ranked({k: spearman(x, y) for k, x in xs.items()})
+    return out
+
+
+def headline_names(records: dict, mode: str) -> list[str]:
+    names: dict[str, None] = {}
+    for r in ran(records, mode):
+        names.update(dict.fromkeys(r["results"][mode].get("headline", {})))
+    return list(names)
+
+
+def headline_array(records: dict, mode: str, name: str) -> np.ndarray:
+    """A headline number of every case run in this mode (NaN where it has none)."""
+    vals = [r["results"][mode].get("headline", {}).get(name) for r in ran(records, mode)]
+    return np.array([np.nan if v is None else float(v) for v in vals])
+
+
+def headline_sensitivity(records: dict, modes, keys) -> dict:
+    """{mode: {headline number: [[key, rank correlation], ...]}} over the completed cases."""
+    out = {}
+    for mode in modes:
+        rs = ran(records, mode)
+        ok = np.array([r["results"][mode]["status"] == "completed" for r in rs], dtype=bool)
+        out[mode] = {}
+        for name in headline_names(records, mode):
+            y = headline_array(records, mode, name)
+            good = ok & np.isfinite(y)
+            scores = {k: spearman(numeric([r["values"][k] for r in rs])[good], y[good])
+                      for k in keys}
+            out[mode][name] = _ranked(scores)
+    return out
+
+
+def severity(result: dict, names: list[str], limits: dict) -> tuple:
+    """Sort key of a worst case (larger is worse): numerics failed, criteria failed, then
+    how close the speeds, the pitch and the hull stress came to their ``limits``
+    ({headline number: limit}; the nearest counts)."""
+    h = result.get("headline", {})
+    margin = max([(h.get(k) or 0.0) / lim for k, lim in limits.items() if lim] or [0.0])
+    return (result["status"] != "completed", len(failed_criteria(result, names)), margin)
+
+
+def worst_cases(records: dict, mode: str, n: int, base) -> list[int]:
+    """The indices of the ``n`` worst cases run in ``mode`` (worst first), each against its own
+    limits (those of ``base``, the base scenario, unless the case varies them)."""
+    names = criteria_names(records, mode)
+    rs = ran(records, mode)
+    rs.sort(key=lambda r: severity(r["results"][mode], names, limits_of(base, r["values"])),
+            reverse=True)
+    return [r["case"] for r in rs[:n]]
+
+
+# --------------------------------------------------------------------------- the dataset
+def _unit(name: str) -> str:
+    return next((u for end, u in UNITS if name.endswith(end)), "1")
+
+
+def _events_text(events: list[dict]) -> str:
+    return "; ".join(f"{e['kind']} {e['time_s']:g} s" + (f" ({e['bag']})" if e.get("bag") else "")
+                     for e in events)
+
+
+def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Dataset:
+    """The sweep as one dataset: ``case`` x ``control``, the varied keys as coordinates."""
+    modes, n = list(spec.controls), len(cases)
+    coords = {"case": ("case", np.arange(n), {"long_name": "case index"}),
+              "control": ("control", np.array(modes, dtype=object)),
+              "case_name": ("case", np.array([names[c.index] for c in cases], dtype=object))}
+    for k in spec.keys:
+        vals = [c.values[k] for c in cases]
+        arr = (np.asarray(vals, dtype=float) if all(isinstance(v, int | float) and not
+               isinstance(v, bool) for v in vals) else
+               np.array([json.dumps(v) if not isinstance(v, str) else v for v in vals], dtype=object))
+        coords[k] = ("case", arr, {"long_name": f"swept scenario key {k}"})
+    if any(c.seed is not None for c in cases):
+        coords["noise_seed"] = ("case", np.array([str(c.seed) for c in cases], dtype=object),
+                                {"long_name": "the case's disturbance.seed"})
+    recs = [records.get(c.index) for c in cases]
+    data = {"status": ("case", np.array([r["status"] if r else "missing" for r in recs], dtype=object),
+                       {"long_name": "completed, failed (numerics or an invalid combination) or lost"}),
+            "attempts": ("case", np.array([r.get("attempts", 0) if r else 0 for r in recs], dtype=np.int32)),
+            "elapsed_s": ("case", np.array([np.nan if not r or r.get("elapsed_s") is None else r["elapsed_s"]
+                                            for r in recs]), {"units": "s"})}
+    crit = list(dict.fromkeys(c for m in modes for c in criteria_names(records, m)))
+    head = list(dict.fromkeys(h for m in modes for h in headline_names(records, m)))
+    shape = (n, len(modes))
+    text = {v: np.full(shape, "", dtype=object) for v in ("mode_status", "error", "events", "failed_criteria")}
+    flags = {c: np.full(shape, -1, dtype=np.int8) for c in [*crit, ALL]}
+    nums = {h: np.full(shape, np.nan) for h in head}
+    for i, r in enumerate(recs):
+        for j, m in enumerate(modes):
+            res = (r or {}).get("results", {}).get(m)
+            if res is None or r["status"] == "lost":
+                text["mode_status"][i, j] = r["status"] if r else "missing"
+                continue
+            names_m = criteria_names(records, m)
+            failed = failed_criteria(res, names_m)
+            text["mode_status"][i, j] = res["status"]
+            text["error"][i, j] = res.get("error") or ""
+            text["events"][i, j] = _events_text(res.get("events", []))
+            text["failed_criteria"][i, j] = ", ".join(failed)
+            for c in names_m:
+                flags[c][i, j] = 0 if c in failed else 1
+            flags[ALL][i, j] = 0 if failed or not names_m else 1
+            for h, v in res.get("headline", {}).items():
+                if v is not None and h in nums:
+                    nums[h][i, j] = float(v)
+    for v, arr in text.items():
+        data[v] = (("case", "control"), arr)
+    flag_attrs = {"flag_values": np.array([-1, 0, 1], dtype=np.int8),
+                  "flag_meanings": "not_run failed passed"}
+    for c, arr in flags.items():
+        long = "every criterion" if c == ALL else f"criterion {c}"
+        data[f"criterion_{c}"] = (("case", "control"), arr, {**flag_attrs, "long_name": long})
+    for h, arr in nums.items():
+        data[h] = (("case", "control"), arr, {"units": _unit(h), "long_name": f"headline {h}"})
+    return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -1,0 +1,195 @@
+"""The sweep's report: one self-contained HTML page (figures embedded), readable printed.
+
+Per control mode: the probability of failing each criterion with its 95 % Wilson interval,
+the varied keys ranked by their influence (rank correlation with failing, and with the
+headline numbers as a tornado plot), the distributions of the headline numbers, the worst
+cases with the scenario file and the command that reruns each one exactly, and the cases that
+failed or were lost with their messages.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from datetime import UTC, datetime
+
+from flexlift import __version__
+from flexlift.sweep import aggregate as agg
+from flexlift.sweep import plots
+
+_CSS = """
+body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; max-width: 64rem;
+       margin: 2rem auto; padding: 0 1rem; color: #1d2330; line-height: 1.45; }
+h1 { font-size: 1.6rem; border-bottom: 3px solid #1f4e79; padding-bottom: .3rem; }
+h2 { font-size: 1.25rem; color: #1f4e79; margin-top: 2.2rem; border-bottom: 1px solid #c9d3e0; }
+table { border-collapse: collapse; margin: .6rem 0 1rem; font-size: .86rem; }
+th, td { border: 1px solid #c9d3e0; padding: .25rem .55rem; text-align: right; vertical-align: top; }
+th { background: #eef3f9; text-align: center; }
+td.l, th.l { text-align: left; }
+code { font-size: .82rem; }
+figure { margin: 1rem 0; page-break-inside: avoid; }
+figure img { max-width: 100%; border: 1px solid #e1e6ee; }
+figcaption, .meta { font-size: .85rem; color: #4a5568; }
+.fail { color: #b42318; font-weight: bold; }
+.pass { color: #17703a; font-weight: bold; }
+.verdict { font-size: 1.05rem; padding: .6rem .9rem; border-radius: 4px; margin: 1rem 0;
+           background: #eef3f9; border: 1px solid #1f4e79; }
+@media print { body { max-width: none; margin: 0; } }
+"""
+
+
+def _e(x) -> str:
+    return html.escape(str(x))
+
+
+def _pct(p) -> str:
+    return "–" if p is None else f"{100 * p:.3g} %"
+
+
+def _num(v) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return _e(v)
+
+
+def _table(head: list[str], rows: list[list[str]], left: int = 1) -> str:
+    th = "".join(f'<th class="{"l" if k < left else ""}">{_e(h)}</th>' for k, h in enumerate(head))
+    body = "".join("<tr>" + "".join(f'<td class="{"l" if k < left else ""}">{c}</td>'
+                                    for k, c in enumerate(r)) + "</tr>" for r in rows)
+    return f"<table><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _figure(fig, caption: str) -> str:
+    if fig is None:
+        return ""
+    data = base64.b64encode(plots.png(fig)).decode("ascii")
+    return (f'<figure><img alt="{_e(caption)}" src="data:image/png;base64,{data}">'
+            f"<figcaption>{_e(caption)}</figcaption></figure>")
+
+
+def _variations(spec) -> str:
+    if spec.method == "grid":
+        rows = [[f"<code>{_e(k)}</code>", _e(", ".join(map(str, v))), str(len(v))]
+                for k, v in spec.grid.items()]
+        return _table(["key", "values", "count"], rows)
+    rows = [[f"<code>{_e(k)}</code>", _e(d.describe())] for k, d in spec.distributions.items()]
+    how = "Latin hypercube" if spec.method == "lhs" else "plain Monte Carlo"
+    return (f'<p>{spec.samples:,} samples, {how}, seed {spec.seed}.</p>'
+            + _table(["key", "distribution"], rows))
+
+
+def _probabilities(summary: dict, mode: str) -> str:
+    fp = summary["by_control"][mode]
+    rows = []
+    for c, w in fp.items():
+        name = "every criterion (an unsafe lift)" if c == agg.ALL else c.replace("_", " ")
+        cls = "fail" if w["failed"] else "pass"
+        rows.append([_e(name), f'<span class="{cls}">{w["failed"]}</span> / {w["n"]}',
+                     _pct(w["p"]), f"{_pct(w['low'])} – {_pct(w['high'])}"])
+    return _table(["criterion", "cases failed", "probability of failure", "95 % interval (Wilson)"], rows)
+
+
+def _verdict(summary: dict, mode: str) -> str:
+    w = summary["by_control"][mode].get(agg.ALL)
+    if not w or not w["n"]:
+        return f'<div class="verdict">{_e(mode)}: no case ran.</div>'
+    safe, lo, hi = 1 - w["p"], 1 - w["high"], 1 - w["low"]
+    return (f'<div class="verdict"><b>{_e(mode)} control:</b> the lift met every criterion in '
+            f"{w['n'] - w['failed']} of {w['n']} cases: probability of a safe lift {_pct(safe)} "
+            f"(95 % interval {_pct(lo)} – {_pct(hi)}).</div>")
+
+
+def _influence(summary: dict, mode: str, keys) -> str:
+    sens = summary["sensitivity_by_control"][mode]
+    crits = [c for c, ranked in sens.items() if ranked]
+    if not crits:
+        return ("<p>No criterion's outcome varied across the cases, so no key can be ranked by "
+                "Spearman's rank correlation with failing; the figure ranks them by their "
+                "influence on the headline numbers.</p>")
+    rows = []
+    for k in keys:
+        cells = []
+        for c in crits:
+            s = dict(map(tuple, sens[c])).get(k)
+            cells.append("–" if s is None else f"{s:+.2f}")
+        rows.append([f"<code>{_e(k)}</code>", *cells])
+    return ("<p>Spearman's rank correlation between each key and failing the criterion "
+            "(positive: larger values fail more often).</p>"
+            + _table(["key", *[c.replace("_", " ") for c in crits]], rows))
+
+
+def _worst(summary: dict, mode: str, rerun: dict, keys) -> str:
+    worst = summary["worst"][mode]
+    if not worst:
+        return "<p>No case ran.</p>"
+    rows = []
+    for w in worst:
+        vals = "<br>".join(f"{_e(k)} = {_num(w['values'].get(k))}" for k in keys)
+        h = w["headline"]
+        why = [f"{_e(c)}: {_e(w.get('reasons', {}).get(c, 'failed'))}" for c in w["failed"]]
+        failed = "<br>".join(why) or "none"
+        path = rerun.get(w["case"])
+        cmd = (f"<code>flexlift run {_e(path)} --control {_e(mode)}</code>" if path else "–")
+        rows.append([_e(w["name"]), vals, f'<span class="{"fail" if w["failed"] else "pass"}">'
+                     f"{failed}</span>" + (f"<br>{_e(w['error'])}" if w.get("error") else ""),
+                     _num(h.get("max_ascent_velocity_ms")), _num(h.get("max_descent_velocity_ms")),
+                     _num(h.get("max_pitch_deg")), _num(h.get("max_utilisation")), cmd])
+    return ("<p>Worst first: numerics failed or an invalid scenario, then most criteria failed, "
+            "then nearest a limit (ascent and descent speed, pitch, hull stress against the "
+            "allowable). Each scenario file reruns its case exactly: it is the case as run, "
+            "every default filled in, and <code>flexlift run FILE --control MODE</code> gives "
+            "the whole analysis with these numbers.</p>"
+            + _table(["case", "values", "failed, and why", "max ascent velocity [m/s]",
+                      "max descent velocity [m/s]", "max pitch [deg]", "max utilisation",
+                      "rerun"], rows, left=3))
+
+
+def _failures(summary: dict) -> str:
+    fails = summary["failures"]
+    if not fails:
+        return "<p>None: every case's simulation completed.</p>"
+    rows = [[_e(f["name"]), _e(f["status"]), _e(f["message"])] for f in fails[:50]]
+    more = f"<p class='meta'>and {len(fails) - 50} more (results.nc lists them all).</p>" if len(fails) > 50 else ""
+    return _table(["case", "status", "message"], rows, left=3) + more
+
+
+def render_report(result, summary: dict, rerun: dict) -> str:
+    """The HTML page of a finished sweep (``rerun``: case index -> its scenario file)."""
+    spec, records = result.spec, result.records
+    keys = list(spec.keys)
+    limits = {k: v for k, v in agg.limits_of(spec.base).items()
+              if agg.LIMITED[k] not in spec.keys}  # a limit that varies has no one line
+    when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    parts = [f"<h1>Sweep of {_e(spec.base.name)}: {spec.n_cases:,} cases</h1>",
+             f'<p class="meta">flexlift {_e(__version__)}, {when}; base {_e(spec.base_ref)} '
+             f"(SHA-256 {spec.base.checksum()[:16]}…), SPEC checksum {spec.checksum()[:16]}…; "
+             f"engine {_e(result.engine)}; {summary['completed']} completed, "
+             f"{summary['failed'] - summary['lost']} failed, {summary['lost']} lost; "
+             f"{result.skipped} found finished, {result.ran} run now in {result.elapsed_s:.1f} s.</p>"]
+    parts += [_verdict(summary, m) for m in spec.controls]
+    parts += ["<h2>What varies</h2>", _variations(spec)]
+    if spec.fixed:
+        parts.append("<p>Fixed for every case: " + ", ".join(
+            f"<code>{_e(k)} = {_e(v)}</code>" for k, v in spec.fixed.items()) + ".</p>")
+    for m in spec.controls:
+        parts += [f"<h2>Probability of failure: {_e(m)} control</h2>", _probabilities(summary, m),
+                  "<p class='meta'>A case whose numerics failed, or whose values do not make a "
+                  "valid scenario (e.g. a lift plan that cannot be laid out), counts as failing "
+                  "every criterion; lost cases are not counted.</p>",
+                  f"<h2>Influence of the keys: {_e(m)} control</h2>", _influence(summary, m, keys),
+                  _figure(plots.tornado(summary["headline_sensitivity"], m, keys),
+                          f"Spearman rank correlation of each key with the headline numbers ({m} control): "
+                          "a tornado of the keys' influence."),
+                  f"<h2>Worst cases: {_e(m)} control</h2>", _worst(summary, m, rerun, keys)]
+    parts += ["<h2>Distributions of the headline numbers</h2>",
+              _figure(plots.cdfs(records, spec.controls, limits),
+                      "Empirical CDFs over the completed cases; dashed: the limit."),
+              "<h2>Failed and lost cases</h2>", _failures(summary)]
+    if summary["warnings"]:
+        parts += ["<h2>Warnings of the cases</h2>", _table(
+            ["warning", "cases"], [[_e(w), str(n)] for w, n in summary["warnings"]])]
+    body = "\n".join(p for p in parts if p)
+    return (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>flexlift sweep: "
+            f"{_e(spec.base.name)}</title><style>{_CSS}</style></head><body>{body}</body></html>\n")

@@ -1,0 +1,253 @@
+"""Running a sweep: cases out to an engine, records into the folder as they finish, and the
+results at the end.
+
+:func:`run_sweep` skips the cases its folder already holds (a rerun of an interrupted sweep),
+keeps at most ``engine.window`` cases in flight, and writes each case's record as soon as it
+returns. A case whose worker died (a killed process, a lost Dask worker) is retried once, on
+its own (so that a case that kills its worker cannot take an innocent one down with it
+twice); if it dies again it is recorded as lost. Ctrl-C (or any exception) stops the engine
+and leaves every finished case in the folder for the rerun.
+"""
+
+from __future__ import annotations
+
+import collections
+import concurrent.futures as cf
+import json
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from flexlift import __version__
+from flexlift.errors import clean
+from flexlift.sweep import aggregate as agg
+from flexlift.sweep.cases import Case, case_name, case_scenario, changes, make_cases
+from flexlift.sweep.spec import SweepSpec
+from flexlift.sweep.store import SweepFolder
+from flexlift.sweep.worker import Task, run_case
+
+log = logging.getLogger(__name__)
+#: how often the coordinator wakes up while waiting for a case (progress stays live) [s]
+POLL_S = 0.5
+#: most failed cases listed in summary.json and the report (results.nc has them all)
+MAX_LISTED = 100
+
+
+@dataclass
+class SweepResult:
+    """A finished sweep: its records by case index, what was run now, and the summary."""
+
+    spec: SweepSpec
+    out: Path
+    engine: str
+    records: dict
+    skipped: int
+    ran: int
+    elapsed_s: float
+    summary: dict = field(default_factory=dict)
+
+    @property
+    def completed(self) -> int:
+        return sum(r["status"] == "completed" for r in self.records.values())
+
+    @property
+    def failed(self) -> int:
+        return sum(r["status"] != "completed" for r in self.records.values())
+
+    def most_common_failure(self) -> tuple[str, int] | None:
+        """The most common failure message and how many cases it ended, or None."""
+        msgs = collections.Counter(failure_message(r) for r in self.records.values()
+                                   if r["status"] != "completed")
+        return msgs.most_common(1)[0] if msgs else None
+
+
+def failure_message(record: dict) -> str:
+    if record["status"] == "lost":
+        return record.get("error") or "lost"
+    errs = [f"{m}: {res['error']}" for m, res in record.get("results", {}).items()
+            if res.get("status") != "completed"]
+    return errs[0] if errs else "failed"
+
+
+def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
+    """Run (or resume) ``spec`` into the folder ``out`` and write its results there.
+
+    engine : an engine of :mod:`flexlift.sweep.executors` (default: local processes, one per
+        core); it is closed when the sweep ends
+    progress : optional callable ``(done, total, failed)`` called as cases finish
+    """
+    from flexlift.sweep.executors import make_engine
+
+    t0 = time.perf_counter()
+    cases = make_cases(spec)
+    names = {c.index: case_name(spec, c.index) for c in cases}
+    try:
+        with SweepFolder.open(out, spec) as folder:
+            records = folder.finished(names)
+            skipped = len(records)
+            todo = [c for c in cases if c.index not in records]
+            if progress is not None:
+                progress(len(records), len(cases), _failures(records))
+            if engine is None and todo:
+                engine = make_engine()
+            if todo:
+                _execute(engine, spec, todo, names, folder, records, folder.inc.run_id,
+                         progress)
+            result = SweepResult(spec, folder.path, getattr(engine, "name", "none"), records,
+                                 skipped, len(todo), round(time.perf_counter() - t0, 3))
+            _write_results(result, cases, names, folder)
+            folder.finish()
+    except BaseException:
+        if engine is not None:
+            engine.close(cancel=True)
+        raise
+    if engine is not None:
+        engine.close()
+    return result
+
+
+def _failures(records: dict) -> int:
+    return sum(r["status"] != "completed" for r in records.values())
+
+
+def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, progress) -> None:
+    queue = collections.deque(todo)
+    suspects: collections.deque[Case] = collections.deque()
+    attempts: dict[int, int] = collections.Counter()
+    inflight: dict[cf.Future, Case] = {}
+    total = len(names)
+    while queue or suspects or inflight:
+        # a suspect (its worker died once) runs alone, when nothing else is in flight
+        while suspects and not inflight:
+            _submit(engine, spec, suspects.popleft(), attempts, inflight)
+        while queue and not suspects and len(inflight) < engine.window:
+            _submit(engine, spec, queue.popleft(), attempts, inflight)
+        done, _ = cf.wait(list(inflight), timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
+        for f in done:
+            case = inflight.pop(f)
+            try:
+                record, datasets = f.result()
+            except Exception as exc:  # the case never returned (run_case records its errors)
+                if not worker_lost(exc):  # e.g. flexlift cannot be imported on a Dask worker
+                    record, datasets = _broken(case, exc), {}
+                elif attempts[case.index] >= 2:
+                    record, datasets = _lost(case, exc), {}
+                else:
+                    log.info("case %d: worker lost (%s); retrying it once", case.index, exc)
+                    suspects.append(case)
+                    continue
+            record.update(values=dict(case.values), noise_seed=case.seed, run_id=run_id,
+                          attempts=attempts[case.index])
+            records[case.index] = folder.write_case(names[case.index], record, datasets)
+            if progress is not None:
+                progress(len(records), total, _failures(records))
+
+
+def _submit(engine, spec, case: Case, attempts, inflight) -> None:
+    attempts[case.index] += 1
+    task = Task(case.index, spec.base, changes(spec, case), spec.controls, spec.keep == "histories")
+    inflight[engine.submit(run_case, task)] = case
+
+
+#: how engines report a worker that died under a case (the process killed, the machine lost)
+LOST = ("BrokenProcessPool", "BrokenExecutor", "KilledWorker", "CommClosedError",
+        "CancelledError", "FutureCancelledError")
+
+
+def worker_lost(exc: BaseException) -> bool:
+    """Whether ``exc`` (from a case's future) says its worker died, rather than that the
+    worker could not run the case at all."""
+    return any(t.__name__ in LOST for t in type(exc).__mro__)
+
+
+def _broken(case: Case, exc: Exception) -> dict:
+    """A case its worker could not run (not retried now; a rerun tries it again)."""
+    why = clean(f"{type(exc).__name__}: {exc}", 240)
+    return {"case": case.index, "status": "lost", "results": {}, "warnings": [],
+            "elapsed_s": None, "error": f"lost: the worker could not run the case ({why})"}
+
+
+def _lost(case: Case, exc: Exception) -> dict:
+    why = clean(str(exc), 200) or type(exc).__name__
+    return {"case": case.index, "status": "lost", "results": {}, "warnings": [],
+            "elapsed_s": None, "error": f"lost: its worker died twice ({type(exc).__name__}: {why})"}
+
+
+# --------------------------------------------------------------------------- the results
+def _write_results(result: SweepResult, cases, names, folder) -> None:
+    from flexlift.output.files import atomic_file, write_json, write_text
+    from flexlift.sweep.report import render_report
+
+    spec, records = result.spec, result.records
+    summary = summarize(result)
+    result.summary = summary
+    attrs = {"title": f"flexlift sweep of {spec.base.name}", "flexlift_version": __version__,
+             "spec_checksum": spec.checksum(), "base_checksum": spec.base.checksum(),
+             "method": spec.method, "engine": result.engine,
+             "failure_probability": json.dumps(summary["by_control"])}
+    if spec.seed is not None:
+        attrs.update(seed=str(spec.seed), samples=int(spec.samples))
+    ds = agg.build_dataset(spec, cases, names, records, attrs)
+    folder.claim("results.nc", "summary.json", "report.html")
+    with atomic_file(folder.path / "results.nc", suffix=".nc") as tmp:
+        ds.to_netcdf(tmp, engine="scipy")
+    rerun = _write_reruns(spec, cases, names, summary, folder)
+    write_json(folder.path / "summary.json", summary)
+    write_text(folder.path / "report.html", render_report(result, summary, rerun))
+
+
+def _write_reruns(spec, cases, names, summary, folder) -> dict[int, str]:
+    """The scenario files of the worst and the failed cases, ``rerun/case_NNNN.yaml``; those
+    of an earlier run of this sweep that are no longer wanted are removed (only files the
+    folder's marker lists as this sweep's)."""
+    from flexlift.output.files import write_text
+
+    wanted = set()
+    for mode_worst in summary["worst"].values():
+        wanted |= {w["case"] for w in mode_worst}
+    wanted |= {w["case"] for w in summary["failures"][: spec.worst]}
+    out = {i: f"rerun/{names[i]}.yaml" for i in sorted(wanted)}
+    if out:
+        folder.claim("rerun", *out.values())
+    by_index = {c.index: c for c in cases}
+    for i, rel in out.items():
+        write_text(folder.path / rel, case_scenario(spec, by_index[i]).to_yaml())
+    for rel in sorted(folder.listed()):
+        if rel.startswith("rerun/") and rel not in out.values() and (folder.path / rel).is_file():
+            (folder.path / rel).unlink()
+    return out
+
+
+def summarize(result: SweepResult) -> dict:
+    """summary.json: the counts, the failure probabilities, the influences, the worst cases."""
+    spec, records = result.spec, result.records
+    modes, keys = spec.controls, spec.keys
+    fp = agg.failure_probability(records, modes)
+    sens = agg.sensitivity(records, modes, keys)
+    one = len(modes) == 1
+    flat_fp = {(c if one else f"{m}.{c}"): v for m in modes for c, v in fp[m].items()}
+    flat_sens = {(c if one else f"{m}.{c}"): v for m in modes for c, v in sens[m].items()}
+    worst = {m: [{"case": i, "name": case_name(spec, i), "values": records[i]["values"],
+                  "failed": agg.failed_criteria(records[i]["results"][m], agg.criteria_names(records, m)),
+                  "error": records[i]["results"][m].get("error"),
+                  "reasons": records[i]["results"][m].get("reasons", {}),
+                  "headline": records[i]["results"][m].get("headline", {})}
+                 for i in agg.worst_cases(records, m, spec.worst, spec.base)] for m in modes}
+    failures = [{"case": i, "name": case_name(spec, i), "status": records[i]["status"],
+                 "message": failure_message(records[i]), "values": records[i].get("values", {})}
+                for i in sorted(records) if records[i]["status"] != "completed"][:MAX_LISTED]
+    warnings = collections.Counter(w for r in records.values() for w in r.get("warnings", []))
+    return {
+        "cases": spec.n_cases, "completed": result.completed, "failed": result.failed,
+        "lost": sum(r["status"] == "lost" for r in records.values()),
+        "engine": result.engine, "failure_probability": flat_fp, "sensitivity": flat_sens,
+        "out": str(result.out), "skipped": result.skipped, "ran": result.ran,
+        "elapsed_s": result.elapsed_s, "base": spec.base.name, "base_ref": spec.base_ref,
+        "method": spec.method, "samples": spec.samples, "seed": spec.seed,
+        "controls": list(modes), "keys": list(keys), "spec_checksum": spec.checksum(),
+        "by_control": fp, "sensitivity_by_control": sens,
+        "headline_sensitivity": agg.headline_sensitivity(records, modes, keys),
+        "worst": worst, "failures": failures,
+        "warnings": [[w, n] for w, n in warnings.most_common(20)],
+    }

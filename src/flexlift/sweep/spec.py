@@ -1,0 +1,327 @@
+"""The SPEC file of a sweep: a base scenario, fixed overrides, and a grid or a Monte Carlo.
+
+::
+
+    base: tanker                 # a built-in name, or a path (relative to this file)
+    control: [coordinated]       # the control modes run per case (default: the base's mode)
+    keep: summary                # or histories (every case's full time histories as netCDF)
+    worst: 10                    # how many worst cases the report lists (default 10)
+    set:                         # fixed overrides for every case
+      simulation.duration_s: 6000
+    monte_carlo:
+      samples: 1000
+      seed: 1
+      method: lhs                # Latin hypercube (default) or random
+      vary:
+        lift.breakout_factor:   {dist: uniform, low: 1.2, high: 1.5}
+        seabed.breakout_time_s: {dist: lognormal, median: 400, sigma: 0.3}
+
+or, in place of ``monte_carlo``, a grid whose cases are the product of its lists (the last key
+varies fastest); a list may be written ``{low: 200, high: 800, num: 4}`` (evenly spaced, or
+``scale: log`` for a geometric series)::
+
+    grid:
+      seabed.breakout_time_s: [200, 400, 800]
+      control.breakout_pull_t: {low: 100, high: 200, num: 3}
+
+Every key is checked against the scenario's schema, every grid value and every distribution's
+ends against the base scenario, before anything runs: bad input is one line
+(:class:`~flexlift.errors.InputError`). :func:`load_spec` reads a file; :func:`parse_spec`
+takes the mapping.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import typing
+from dataclasses import dataclass
+from pathlib import Path
+
+from flexlift import __version__
+from flexlift.errors import InputError, brief, clean
+from flexlift.scenario import ControlMode, Scenario, builtin_names, load_scenario
+from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
+from flexlift.sweep.distributions import Distribution, parse_distribution
+from flexlift.sweep.keys import check_key
+
+MODES = typing.get_args(ControlMode)
+TOP_KEYS = ("base", "control", "keep", "worst", "set", "grid", "monte_carlo")
+MC_KEYS = ("samples", "seed", "method", "vary")
+#: more cases than this need ``--yes`` (about 2 hours of tanker ascents on 2 cores)
+LARGE = 100_000
+#: never more cases than this in one sweep (split it)
+MAX_CASES = 1_000_000
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep.
+
+    source : the SPEC as named in messages
+    base : the base scenario with ``set`` applied (every case starts from it)
+    base_ref : the base as written in the SPEC (a name or a path)
+    controls : the control modes run per case
+    keep : ``summary`` or ``histories``
+    fixed : the ``set`` overrides
+    method : ``grid``, ``lhs`` or ``random``
+    grid : key -> tuple of values (a grid), else empty
+    distributions : key -> :class:`Distribution` (a Monte Carlo), else empty
+    samples, seed : of a Monte Carlo (None for a grid)
+    worst : how many worst cases the report lists
+    """
+
+    source: str
+    base: Scenario
+    base_ref: str
+    controls: tuple[str, ...]
+    keep: str
+    fixed: dict
+    method: str
+    grid: dict
+    distributions: dict
+    samples: int | None
+    seed: int | None
+    worst: int
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The varied keys, in the SPEC's order."""
+        return tuple(self.grid or self.distributions)
+
+    @property
+    def n_cases(self) -> int:
+        if self.method == "grid":
+            return math.prod(len(v) for v in self.grid.values())
+        return int(self.samples)
+
+    def canonical(self) -> dict:
+        """What defines the cases and their results: flexlift's version, the base scenario's
+        checksum (``set`` applied), the control modes, what is kept and the variations (the
+        checksum is of this; ``worst`` only shapes the report)."""
+        return {"flexlift": __version__, "base": self.base.checksum(),
+                "controls": list(self.controls), "keep": self.keep,
+                "method": self.method, "samples": self.samples, "seed": self.seed,
+                "grid": {k: list(v) for k, v in self.grid.items()},
+                "vary": {k: [d.kind, [list(p) for p in d.params]]
+                         for k, d in self.distributions.items()}}
+
+    def checksum(self) -> str:
+        """SHA-256 of :meth:`canonical`: two sweeps with the same checksum run the same cases."""
+        text = json.dumps(self.canonical(), sort_keys=True, default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def to_yaml(self, base_file: str = "base.yaml") -> str:
+        """The SPEC as run, its base the file ``base_file`` (the base with ``set`` applied),
+        so that ``flexlift sweep OUT/spec.yaml --out OUT`` resumes the same sweep."""
+        data = {"base": base_file, "control": list(self.controls), "keep": self.keep,
+                "worst": self.worst}
+        if self.method == "grid":
+            data["grid"] = {k: list(v) for k, v in self.grid.items()}
+        else:
+            data["monte_carlo"] = {"samples": self.samples, "seed": self.seed,
+                                   "method": self.method,
+                                   "vary": {k: {"dist": d.kind, **dict(d.params)}
+                                            for k, d in self.distributions.items()}}
+        return dump_yaml(data)
+
+
+def load_spec(path: str | os.PathLike, yes: bool = False) -> SweepSpec:
+    """Read and validate the SPEC file ``path`` (``yes``: allow more than :data:`LARGE`
+    cases)."""
+    source = clean(os.fspath(path), 120)
+    data = load_yaml(decode(read_bytes(Path(path), source, "a SPEC is a YAML file"), source),
+                     source)
+    return parse_spec(data, source, Path(path).parent, yes)
+
+
+def parse_spec(data, source: str = "spec", folder: Path | None = None,
+               yes: bool = False) -> SweepSpec:
+    """Validate the mapping ``data`` of a SPEC; relative base paths are in ``folder``."""
+    if not isinstance(data, dict):
+        raise InputError(source, brief(data, 40), "a SPEC is a mapping with base:, set:, and "
+                         "grid: or monte_carlo:")
+    _only(data, TOP_KEYS, source)
+    base_ref = data.get("base", "tanker")
+    base = _base(base_ref, source, folder)
+    fixed = _mapping(data.get("set", {}), f"{source}: set")
+    fixed = {k: _path(k, v, folder) for k, v in fixed.items()}
+    for k in fixed:
+        check_key(k, f"{source}: set")
+    if fixed:
+        base = _changed(base, fixed, f"{source}: set")
+    controls = _controls(data.get("control", base.control.mode), source)
+    keep = data.get("keep", "summary")
+    if keep not in ("summary", "histories"):
+        raise InputError(f"{source}: keep", brief(keep, 40), "use summary (headline numbers and "
+                         "criteria per case) or histories (also every case's time histories)")
+    worst = data.get("worst", 10)
+    if isinstance(worst, bool) or not isinstance(worst, int) or not 0 <= worst <= 1000:
+        raise InputError(f"{source}: worst", brief(worst, 40), "a whole number 0..1000")
+    if ("grid" in data) == ("monte_carlo" in data):
+        raise InputError.from_line(f"{source}: give either grid: (values per key) or "
+                                   "monte_carlo: (samples, seed, vary), not "
+                                   f"{'both' if 'grid' in data else 'neither'}")
+    common = dict(source=source, base=base, base_ref=str(base_ref), controls=controls, keep=keep,
+                  fixed=fixed, worst=worst)
+    if "grid" in data:
+        grid = _grid(data["grid"], fixed, f"{source}: grid")
+        grid = {k: tuple(_path(k, v, folder) for v in vs) for k, vs in grid.items()}
+        spec = SweepSpec(method="grid", grid=grid, distributions={}, samples=None, seed=None,
+                         **common)
+        _check_size(spec, yes)
+        for key, values in grid.items():  # each value against the base, before anything runs
+            for v in values:
+                _changed(base, {key: v}, f"{source}: grid.{key} = {brief(v, 40)}")
+    else:
+        mc = _mapping(data["monte_carlo"], f"{source}: monte_carlo")
+        _only(mc, MC_KEYS, f"{source}: monte_carlo")
+        samples, seed, method, dists = _monte_carlo(mc, base, fixed, f"{source}: monte_carlo",
+                                                    folder)
+        spec = SweepSpec(method=method, grid={}, distributions=dists, samples=samples, seed=seed,
+                         **common)
+        _check_size(spec, yes)
+    return spec
+
+
+# --------------------------------------------------------------------------- the parts
+def _only(data: dict, allowed, where: str) -> None:
+    for k in data:
+        if k not in allowed:
+            raise InputError.from_line(f"{where}: unknown key {brief(k, 40)}; valid keys here are "
+                                       + ", ".join(allowed))
+
+
+def _mapping(value, where: str) -> dict:
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise InputError(where, brief(value, 40), "must be a mapping of dotted keys, e.g. "
+                         "seabed.breakout_time_s: 400")
+    return value
+
+
+def _base(ref, source: str, folder: Path | None) -> Scenario:
+    if not isinstance(ref, str) or not ref:
+        raise InputError(f"{source}: base", brief(ref, 40), "a built-in name "
+                         f"({', '.join(builtin_names())}) or a path to a scenario YAML file")
+    near = (folder / ref) if folder is not None and not Path(ref).is_absolute() else Path(ref)
+    if near.exists():
+        return load_scenario(near)
+    return load_scenario(ref)
+
+
+def _path(key: str, value, folder: Path | None):
+    """A file a key names (``control.supervisor.fis_file``), relative to the SPEC's folder."""
+    if (key.endswith("fis_file") and isinstance(value, str) and folder is not None
+            and not Path(value).is_absolute()):
+        return str((folder / value).resolve())
+    return value
+
+
+def _changed(base: Scenario, changes: dict, where: str) -> Scenario:
+    try:
+        return base.with_changes(**changes)
+    except InputError as exc:
+        raise InputError.from_line(f"{where}: {exc}") from None
+
+
+def _controls(value, source: str) -> tuple[str, ...]:
+    modes = [value] if isinstance(value, str) else value
+    if not isinstance(modes, list) or not modes or len(set(map(str, modes))) != len(modes):
+        raise InputError(f"{source}: control", brief(value, 60), "one control mode or a list of "
+                         f"different ones from {', '.join(MODES)}")
+    for m in modes:
+        if m not in MODES:
+            raise InputError(f"{source}: control", brief(m, 40), f"use {', '.join(MODES)}")
+    return tuple(modes)
+
+
+def _varied(key, fixed: dict, where: str):
+    k = check_key(key, where)
+    if key in fixed:
+        raise InputError.from_line(f"{where}: {key} is also under set:; fix it or vary it")
+    if key == "name":
+        raise InputError.from_line(f"{where}: name cannot vary (the cases are named "
+                                   "<base name>-case_NNNN); set it under set: instead")
+    return k
+
+
+def _grid(grid, fixed: dict, where: str) -> dict:
+    grid = _mapping(grid, where)
+    if not grid:
+        raise InputError.from_line(f"{where}: give at least one key with its list of values")
+    out = {}
+    for key, values in grid.items():
+        k = _varied(key, fixed, where)
+        out[key] = tuple(_values(values, f"{where}.{key}", k.kind == "whole"))
+    return out
+
+
+def _values(values, where: str, whole: bool) -> list:
+    if isinstance(values, dict):
+        return _spaced(values, where, whole)
+    if not isinstance(values, list) or not values:
+        raise InputError(where, brief(values, 40), "a non-empty list of values, or "
+                         "{low: A, high: B, num: N} (evenly spaced; scale: log for geometric)")
+    return values
+
+
+def _spaced(d: dict, where: str, whole: bool) -> list:
+    import numpy as np
+
+    _only(d, ("low", "high", "num", "scale"), where)
+    lo, hi, num, scale = d.get("low"), d.get("high"), d.get("num"), d.get("scale", "linear")
+    for name, v in (("low", lo), ("high", hi)):
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise InputError(f"{where}.{name}", brief(v, 40), "a finite number")
+    if isinstance(num, bool) or not isinstance(num, int) or not 1 <= num <= MAX_CASES:
+        raise InputError(f"{where}.num", brief(num, 40), f"a whole number 1..{MAX_CASES:,}")
+    if scale not in ("linear", "log"):
+        raise InputError(f"{where}.scale", brief(scale, 40), "linear or log")
+    if scale == "log" and not (lo > 0 and hi > 0):
+        raise InputError.from_line(f"{where}: a log scale needs low and high > 0")
+    vals = np.geomspace(lo, hi, num) if scale == "log" else np.linspace(lo, hi, num)
+    return [int(v) for v in np.rint(vals)] if whole else [float(v) for v in vals]
+
+
+def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path | None = None):
+    samples = mc.get("samples")
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples <= 0:
+        raise InputError(f"{where}.samples", brief(samples, 40), "a whole number >= 1")
+    seed = mc.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise InputError(f"{where}.seed", brief(seed, 40), "a whole number 0..2^63-1")
+    method = mc.get("method", "lhs")
+    if method not in ("lhs", "random"):
+        raise InputError(f"{where}.method", brief(method, 40), "lhs (Latin hypercube, "
+                         "scipy.stats.qmc) or random (plain Monte Carlo)")
+    vary = _mapping(mc.get("vary"), f"{where}.vary")
+    if not vary:
+        raise InputError.from_line(f"{where}.vary: give at least one key with its "
+                                   "distribution, e.g. seabed.breakout_time_s: {dist: uniform, "
+                                   "low: 200, high: 800}")
+    dists: dict[str, Distribution] = {}
+    for key, d in vary.items():
+        k = _varied(key, fixed, f"{where}.vary")
+        if isinstance(d, dict) and isinstance(d.get("values"), list):
+            d = {**d, "values": [_path(key, v, folder) for v in d["values"]]}
+        dist = parse_distribution(k, d, f"{where}.vary")
+        ends = dist.values if dist.kind == "choice" else dist.ppf([0.0, 1.0 - 1e-16])
+        for v in ends:
+            _changed(base, {key: v}, f"{where}.vary.{key} = {brief(v, 40)}")
+        dists[key] = dist
+    return samples, seed, method, dists
+
+
+def _check_size(spec: SweepSpec, yes: bool) -> None:
+    n = spec.n_cases
+    what = "samples" if spec.method != "grid" else "grid cases (the product of the lists)"
+    if n > MAX_CASES:
+        raise InputError.from_line(f"{spec.source}: {n:,} {what}; at most {MAX_CASES:,} in one "
+                                   "sweep: split it into several")
+    if n > LARGE and not yes:
+        raise InputError.from_line(f"{spec.source}: {n:,} {what} (hours of computing); give "
+                                   f"--yes to run more than {LARGE:,}")

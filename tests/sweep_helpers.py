@@ -1,0 +1,40 @@
+"""Workers that die, for the sweep's tests (imported by the worker processes by name)."""
+
+import os
+from pathlib import Path
+
+from flexlift.sweep.worker import run_case
+
+#: the case whose worker dies
+DIE_CASE = 2
+
+
+def dies_always(task):
+    """A worker process that dies (as if killed) whenever it runs case DIE_CASE."""
+    if task.index == DIE_CASE:
+        os._exit(9)
+    return run_case(task)
+
+
+def dies_once(task):
+    """A worker that dies the first time it runs case DIE_CASE (a flag file, named in the
+    base scenario's description, remembers)."""
+    flag = Path(task.base.description)
+    if task.index == DIE_CASE and not flag.exists():
+        flag.write_text("died")
+        os._exit(9)
+    return run_case(task)
+
+
+class Substitute:
+    """An engine that runs ``fn`` in place of the function the sweep submits."""
+
+    def __init__(self, engine, fn):
+        self.engine, self.fn = engine, fn
+        self.name, self.workers, self.window = engine.name, engine.workers, engine.window
+
+    def submit(self, fn, *args):
+        return self.engine.submit(self.fn, *args)
+
+    def close(self, cancel: bool = False):
+        self.engine.close(cancel)
