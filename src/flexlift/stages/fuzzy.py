@@ -60,7 +60,7 @@ def _rule_table(fis: FIS) -> Table:
         if complete:
             rows = [[a.mfs[i].name, *cells[i]] for i in reversed(range(len(a.mfs)))]
             return Table(f"Rule table: {fis.output.name} by {a.name} (rows) and {b.name} (columns)",
-                         [f"{a.name} \\ {b.name}", *b.labels], rows,
+                         [f"{a.name} \\ {b.name}", *b.labels], rows, csv="fuzzy_rules.csv",
                          note=f"{fis.and_method}/{fis.or_method} inference, "
                               f"{fis.implication} implication, {fis.aggregation} aggregation, "
                               f"{fis.defuzzification} on {fis.resolution} points")
@@ -72,14 +72,16 @@ def _rule_table(fis: FIS) -> Table:
                 for i, n, v in zip(r.consequents, r.consequents_negated, fis.outputs)
                 if i is not None]
         rows.append([k, f" {r.connective.upper()} ".join(parts), ", ".join(then), r.weight])
-    return Table(f"Rules of {fis.name!r}", ["rule", "if", "then", "weight"], rows)
+    return Table(f"Rules of {fis.name!r}", ["rule", "if", "then", "weight"], rows,
+                 csv="fuzzy_rules.csv", in_report=len(rows) <= 25)
 
 
 def _sets_table(fis: FIS) -> Table:
     rows = [[v.name, m.name, m.kind, " ".join(f"{p:.6g}" for p in m.params)]
             for v in (*fis.inputs, *fis.outputs) for m in v.mfs]
     return Table("Membership functions (MATLAB parameter order)",
-                 ["variable", "set", "type", "parameters"], rows)
+                 ["variable", "set", "type", "parameters"], rows, csv="fuzzy_sets.csv",
+                 in_report=False)
 
 
 def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = None,
@@ -170,7 +172,7 @@ def _write(out: Path, fis: FIS, tables: list[Table], scenario=None) -> list[Figu
         figures.append(Figure(save(plot_map(d, fill(d)), fdir / "fuzzy_fill_map.png"),
                               "SIFSMC fill map: signed distance d to the fill fraction of "
                               "Q_in,max (zero for d <= 0)."))
-    write_text(tdir / "fuzzy_rules.csv", tables[0].to_csv())
-    write_text(tdir / "fuzzy_sets.csv", tables[1].to_csv())
+    for t in tables:
+        write_text(tdir / t.csv, t.to_csv())
     write_text(out / "fuzzy_supervisor.fis", to_fis_text(fis))
     return figures
