@@ -41,6 +41,27 @@ def _texts_inside(fig, renderer):
         if bb.x0 < -1 or bb.y0 < -1 or bb.x1 > W + 1 or bb.y1 > H + 1:
             bad.append((t.get_text()[:40], bb.bounds))
     assert not bad, bad
+    _titles_clear(fig, renderer)
+
+
+def _titles_clear(fig, renderer):
+    """No axes title overlaps a drawn tick label, axis label or offset text of the figure."""
+    titles = [t for ax in fig.axes for t in (ax.title, ax._left_title, ax._right_title)
+              if t.get_text()]
+    others = []
+    for ax in [c for a in fig.axes for c in (a, *a.child_axes)]:  # secondary axes too
+        for axis in (ax.xaxis, ax.yaxis):
+            lo, hi = sorted(axis.get_view_interval())
+            others += [tk.label1 for tk in axis.get_major_ticks()
+                       if lo <= tk.get_loc() <= hi and tk.label1.get_visible()]
+            others += [tk.label2 for tk in axis.get_major_ticks()
+                       if lo <= tk.get_loc() <= hi and tk.label2.get_visible()]
+            others += [axis.label, axis.offsetText]
+    for t in titles:
+        tb = t.get_window_extent(renderer)
+        for o in others:
+            if o.get_visible() and o.get_text().strip():
+                assert not tb.overlaps(o.get_window_extent(renderer)), (t.get_text(), o.get_text())
 
 
 # ----------------------------------------------------------------------------- Bode phase
@@ -283,3 +304,31 @@ def test_mode_figures_say_flexible_mode(tanker_modes):
     assert list(ax.lines[0].get_xdata()) == [1, 2, 3, 4, 5]
     np.testing.assert_allclose(ax.lines[0].get_ydata(), tanker_modes.frequencies_hz[2:7])
     plt.close(fig)
+
+
+def _fuzzy_figures():
+    from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis
+    from flexlift.output.plots import fuzzy
+    from flexlift.stages.fuzzy import grid_values
+
+    fis = supervisor_fis()
+    g = grid_values(fis, 21)
+    u = np.array(g["u"])
+    d = np.linspace(-1.0, 1.0, 101)
+    return [fuzzy.plot_memberships(fis),
+            fuzzy.plot_surface_contour(g["ze"], g["w"], u, title="Control surface of x"),
+            fuzzy.plot_map(d, fill_fis()(d))]
+
+
+def test_remaining_figures_fit(tanker_hull, tanker_modes, short):
+    """The fixed margins leave every text of every other report figure on the figure and no
+    title over a label."""
+    from flexlift.output.plots.modes import plot_convergence, plot_frequencies
+    from flexlift.structure.convergence import convergence_study
+
+    figs = [plot_convergence(convergence_study(tanker_hull)),
+            plot_frequencies(tanker_modes, tanker_modes, 5), ascent.compare([short, short]),
+            *_fuzzy_figures()]
+    for fig in figs:
+        _texts_inside(fig, _drawn(fig))
+        plt.close(fig)

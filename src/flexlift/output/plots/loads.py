@@ -222,7 +222,7 @@ def shear_moment_figure(st, hull, plan=None):
 
     st : :class:`~flexlift.loads.strength.Strength`; hull : the beam; plan : optional, to mark bags
     """
-    fig, (ax1, ax2) = new_figure(2, 1, sharex=True, figsize=(8.5, 5.6))
+    fig, (ax1, ax2) = new_figure(2, 1, sharex=True, figsize=(8.5, 5.8), margins={"top": 0.85})
     x = st.x
     scale = 1e6
     for ax, y, ext, unit, label, sym in (
@@ -251,7 +251,8 @@ def shear_moment_figure(st, hull, plan=None):
                 ax.axvspan(*b.span, color=_INT, alpha=0.06, lw=0)
     ax1.set_title(
         f"Longitudinal strength: closing V = {st.closing_shear / 1e6:.3f} MN, "
-        f"M = {st.closing_moment / 1e6:.3f} MN m at the bow"
+        f"M = {st.closing_moment / 1e6:.3f} MN m at the bow",
+        pad=34,  # over the node numbers of the top axis and their label
     )
     top = ax1.secondary_xaxis("top")
     step = max(1, hull.n_nodes // 14)
