@@ -332,3 +332,68 @@ def test_remaining_figures_fit(tanker_hull, tanker_modes, short):
     for fig in figs:
         _texts_inside(fig, _drawn(fig))
         plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- figure processes
+def _plain_plot():
+    return plt.subplots()[0]
+
+
+def _failing_plot():
+    fig, ax = plt.subplots()
+    ax.set_title("$\\notacommand$")  # mathtext fails when drawn, not when set
+    return fig
+
+
+def test_figures_in_background_are_the_same_files(tanker, tmp_path):
+    """Drawn by child processes or in this one, the modes stage's PNG files are identical,
+    and all complete when the block ends."""
+    from flexlift.output.plots._style import figures_in_background
+    from flexlift.stages.modes import run_stage
+
+    with figures_in_background(0):
+        here = run_stage(tanker, tmp_path / "here")
+    with figures_in_background(2):
+        there = run_stage(tanker, tmp_path / "there")
+    assert [f.path.name for f in here.figures] == [f.path.name for f in there.figures]
+    for a, b in zip(here.figures, there.figures):
+        assert a.path.read_bytes() == b.path.read_bytes()
+
+
+def test_a_failed_figure_process_is_an_error_at_the_end(tmp_path):
+    from flexlift.output.plots import _style
+
+    ok = _style.draw(tmp_path / "plain.png", _plain_plot)  # no block: drawn here
+    assert ok.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(_style.FigureError, match="bad.png"):
+        with _style.figures_in_background(2):
+            _style.draw(tmp_path / "bad.png", _failing_plot)
+            _style.draw(tmp_path / "good.png", _plain_plot)
+    assert (tmp_path / "good.png").is_file() and not (tmp_path / "bad.png").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["good.png", "plain.png"]
+
+
+def test_an_interrupt_kills_the_figure_processes(tmp_path):
+    import os
+
+    from flexlift.output.plots import _style
+
+    pids = []
+    with pytest.raises(KeyboardInterrupt):
+        with _style.figures_in_background(2):
+            for k in range(2):
+                _style.draw(tmp_path / f"{k}.png", _plain_plot)
+            pids = list(_style._BACKGROUND.running)
+            raise KeyboardInterrupt
+    assert len(pids) == 2 and _style._BACKGROUND is None
+    for pid in pids:  # killed and reaped: no such child any more
+        with pytest.raises(ChildProcessError):
+            os.waitpid(pid, os.WNOHANG)
+
+
+@pytest.mark.parametrize("text, n", [("", 1), ("0", 0), ("3", 3), ("-2", 0), ("many", 1)])
+def test_figure_processes_from_the_environment(monkeypatch, text, n):
+    from flexlift.output.plots._style import PROCESSES_ENV, figure_processes
+
+    monkeypatch.setenv(PROCESSES_ENV, text)
+    assert figure_processes() == n

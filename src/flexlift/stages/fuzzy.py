@@ -141,7 +141,7 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
 
 def _write(out: Path, fis: FIS, tables: list[Table], scenario=None) -> list[Figure]:
     """Figures and tables of ``fis``; with ``scenario``, its fill map as well."""
-    from flexlift.output.plots._style import save
+    from flexlift.output.plots._style import draw
     from flexlift.output.plots.fuzzy import (
         plot_map,
         plot_memberships,
@@ -150,26 +150,26 @@ def _write(out: Path, fis: FIS, tables: list[Table], scenario=None) -> list[Figu
     )
 
     fdir, tdir = out / "figures", out / "tables"
-    figures = [Figure(save(plot_memberships(fis), fdir / "fuzzy_memberships.png"),
+    figures = [Figure(draw(fdir / "fuzzy_memberships.png", plot_memberships, fis),
                       f"Membership functions of the {fis.name} inputs and output.")]
     if fis.n_inputs == 2 and fis.n_outputs == 1:
         g = grid_values(fis, PLOT_GRID)
         labels = (fis.inputs[0].name, fis.inputs[1].name, fis.output.name)
         u = np.array(g["u"])
         figures.append(Figure(
-            save(plot_surface_3d(g["ze"], g["w"], u, labels, title=f"Control surface of {fis.name}"), fdir / "fuzzy_surface_3d.png"),
+            draw(fdir / "fuzzy_surface_3d.png", plot_surface_3d, g["ze"], g["w"], u, labels,
+                 title=f"Control surface of {fis.name}"),
             f"Control surface {labels[2]}({labels[0]}, {labels[1]}) by exact inference."))
         centres = [[m.params[1] if m.kind == "gaussmf" else np.nan for m in v.mfs]
                    for v in fis.inputs]
         figures.append(Figure(
-            save(plot_surface_contour(g["ze"], g["w"], u, labels, centres=centres,
-                                      title=f"Control surface of {fis.name}"),
-                 fdir / "fuzzy_surface_contour.png"),
+            draw(fdir / "fuzzy_surface_contour.png", plot_surface_contour, g["ze"], g["w"], u,
+                 labels, centres=centres, title=f"Control surface of {fis.name}"),
             "Control surface as contours; the black line is u = 0."))
     if scenario is not None:  # the fill map the simulation uses (built in or the user's)
         fill = fill_map_of(scenario)
         d = np.linspace(-1.0, 1.0, 401)
-        figures.append(Figure(save(plot_map(d, fill(d)), fdir / "fuzzy_fill_map.png"),
+        figures.append(Figure(draw(fdir / "fuzzy_fill_map.png", plot_map, d, fill(d)),
                               "SIFSMC fill map: signed distance d to the fill fraction of "
                               "Q_in,max (zero for d <= 0)."))
     for t in tables:

@@ -230,7 +230,7 @@ def layout_mode(scenario) -> int | None:
 
 def _write(out: Path, scenario, modes: Modes, wet: Modes, conv, summary: dict,
            tables: list[Table]) -> list[Figure]:
-    from flexlift.output.plots._style import save
+    from flexlift.output.plots._style import draw
     from flexlift.output.plots.modes import plot_convergence, plot_frequencies, plot_mode_shapes
 
     fdir, tdir = out / "figures", out / "tables"
@@ -241,20 +241,20 @@ def _write(out: Path, scenario, modes: Modes, wet: Modes, conv, summary: dict,
         f" The external bags sit at the nodes of {mode_title(modes.flexible_index(bags_on))} "
         "(lift.layout_flexible_mode).")
     figures = [Figure(
-        save(plot_mode_shapes(modes, k, highlight=bags_on), fdir / "modes_shapes.png"),
+        draw(fdir / "modes_shapes.png", plot_mode_shapes, modes, k, highlight=bags_on),
         f"Flexible modes 1 to {k} (unit peak, dry) with the beam nodes nearest their zero "
         f"crossings marked: a lift point there does not excite that mode.{on}",
     )]
     n_res = summary["mesh_resolved_flexible_modes"]
     figures.append(Figure(
-        save(plot_frequencies(modes, wet, n_res), fdir / "modes_frequencies.png"),
+        draw(fdir / "modes_frequencies.png", plot_frequencies, modes, wet, n_res),
         f"Natural frequencies of flexible modes 1 to {n_res}, dry and wet (heave and pitch: "
         "0 Hz)" + ("; crosses: analytic uniform free-free beam." if summary["analytic_hz"]
                    else "."),
     ))
     if conv is not None:
         figures.append(Figure(
-            save(plot_convergence(conv), fdir / "modes_convergence.png"),
+            draw(fdir / "modes_convergence.png", plot_convergence, conv),
             f"Relative error of flexible modes 1 to {conv.reference_hz.size} against element "
             f"count (reference: {conv.reference}); Hermite cubics converge as h^4.",
         ))

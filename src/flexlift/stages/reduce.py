@@ -168,7 +168,7 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
     figures: list[Figure] = []
     if out is not None:
         from flexlift.dynamics.reduce import band_grid
-        from flexlift.output.plots._style import save
+        from flexlift.output.plots._style import draw
         from flexlift.output.plots.reduce import plot_bode, plot_gains, plot_time
 
         b, models, cmp, gains = first
@@ -176,18 +176,18 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
         fdir, tdir = Path(out) / "figures", Path(out) / "tables"
         what = f"{b.name}: {full.inputs[0]} → {full.outputs[0]}"
         figures.append(Figure(
-            save(plot_gains(full, gains, cmp.omega_lo, what), fdir / "reduce_gains.png"),
+            draw(fdir / "reduce_gains.png", plot_gains, full, gains, cmp.omega_lo, what),
             f"Per-mode gain of {what}: by mode (heave, pitch, flexible modes 1, 2, ...), "
             "against frequency and sorted (flexible modes: dc gain; rigid modes: gain at "
             "ω_lo)."))
         w = band_grid(full, cmp.omega_lo / 2, 3000)
         figures.append(Figure(
-            save(plot_bode(models, w, f"Bode, {what}"), fdir / "reduce_bode.png"),
+            draw(fdir / "reduce_bode.png", plot_bode, models, w, f"Bode, {what}"),
             f"Bode magnitude and phase of the full and the four {order}-mode models, {what}."))
         f1 = float(full.omega[~full.rigid].min()) / TWO_PI
         t = np.linspace(0.0, 10.0 / f1, 2001)
         figures.append(Figure(
-            save(plot_time(models, t, f"Time responses, {what}"), fdir / "reduce_time.png"),
+            draw(fdir / "reduce_time.png", plot_time, models, t, f"Time responses, {what}"),
             f"Step and impulse responses of the full and reduced models, {what}; right: with "
             "the rigid-body motion subtracted, leaving the flexible response."))
         for t in (table, gains_table):

@@ -3,11 +3,24 @@
 Figures are laid out by fixed margins in inches (:func:`new_figure`), not by a layout engine:
 matplotlib's constrained layout draws every figure twice (once to measure, once to render),
 which was half of the time of ``flexlift run``. Each save is one draw at ``savefig.dpi``.
+
+Inside :func:`figures_in_background` (``flexlift run`` uses it) :func:`save` hands the drawing
+and writing of each PNG to a forked child process and returns at once, so the figures are
+drawn while the next stage computes; at most :func:`figure_processes` children run at a
+time, and leaving the block waits for them all (an error in one is raised there; an
+exception or Ctrl-C in the block kills them first). ``FLEXLIFT_FIGURE_PROCESSES=0`` (or a
+platform without ``fork``) draws every figure in the calling process, as the single-stage
+commands always do.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
+import sys
+import traceback
+import warnings
 from pathlib import Path
 
 import matplotlib
@@ -79,17 +92,148 @@ def lean_log_axes(ax, max_decades: float = 4.0) -> None:
             axis.set_major_locator(LogLocator(numticks=7))
 
 
-def save(fig, path: str | os.PathLike) -> Path:
-    """Save ``fig`` as PNG atomically (one draw) and close it; returns the path."""
+def _write(fig, path: Path) -> None:
+    """Lay out and draw ``fig`` into ``path`` atomically (one draw)."""
     from flexlift.output.files import atomic_file
 
+    apply_margins(fig)
+    for ax in fig.axes:
+        lean_log_axes(ax)
+    with atomic_file(path, suffix=".png") as tmp, plt.rc_context(STYLE):
+        fig.savefig(tmp, format="png")
+
+
+def save(fig, path: str | os.PathLike) -> Path:
+    """Save ``fig`` as PNG atomically (one draw) and close it; returns the path. Inside
+    :func:`figures_in_background` the file is written by a child process, complete by the
+    end of that block."""
     path = Path(path)
     try:
-        apply_margins(fig)
-        for ax in fig.axes:
-            lean_log_axes(ax)
-        with atomic_file(path, suffix=".png") as tmp, plt.rc_context(STYLE):
-            fig.savefig(tmp, format="png")
+        if _BACKGROUND is not None:
+            _BACKGROUND.submit(lambda: fig, path)
+        else:
+            _write(fig, path)
     finally:
         plt.close(fig)
     return path
+
+
+def draw(path: str | os.PathLike, plot, *args, **kwargs) -> Path:
+    """Build the figure ``plot(*args, **kwargs)`` and :func:`save` it to ``path``; inside
+    :func:`figures_in_background` a child process does both (this process creates no
+    matplotlib object at all). Returns the path."""
+    path = Path(path)
+    if _BACKGROUND is not None:
+        _BACKGROUND.submit(lambda: plot(*args, **kwargs), path)
+        return path
+    fig = plot(*args, **kwargs)
+    try:
+        _write(fig, path)
+    finally:
+        plt.close(fig)
+    return path
+
+
+#: the environment variable that sets :func:`figure_processes`
+PROCESSES_ENV = "FLEXLIFT_FIGURE_PROCESSES"
+
+
+def figure_processes() -> int:
+    """How many figures ``flexlift run`` draws at once in child processes: the environment's
+    ``FLEXLIFT_FIGURE_PROCESSES`` (0: none, every figure in the main process), by default 1
+    (on a 2-core machine, the main process and one figure process), 0 without ``fork``."""
+    if not hasattr(os, "fork"):
+        return 0
+    text = os.environ.get(PROCESSES_ENV, "").strip()
+    try:
+        return max(0, int(text)) if text else 1
+    except ValueError:
+        return 1
+
+
+class FigureError(RuntimeError):
+    """A figure process failed (its traceback went to stderr)."""
+
+
+class _Background:
+    """Forked children drawing figures, at most ``n`` at a time (pid -> path)."""
+
+    def __init__(self, n: int):
+        self.n = n
+        self.running: dict[int, Path] = {}
+        self.failed: list[str] = []
+
+    def submit(self, make, path: Path) -> None:
+        """Draw ``make()`` (a figure) into ``path`` in a new child process."""
+        while len(self.running) >= self.n:
+            self._reap_oldest()
+        sys.stdout.flush()
+        sys.stderr.flush()  # the child must not write the parent's pending output again
+        with warnings.catch_warnings():  # Python >= 3.12 warns of BLAS's idle threads
+            warnings.simplefilter("ignore", DeprecationWarning)
+            pid = os.fork()
+        if pid == 0:  # the child: draw, write, leave without running the parent's cleanup
+            code = 1
+            try:
+                signal.signal(signal.SIGINT, signal.SIG_DFL)
+                signal.signal(signal.SIGTERM, signal.SIG_DFL)
+                fig = make()
+                _write(fig, path)
+                plt.close(fig)
+                code = 0
+            except BaseException:
+                traceback.print_exc()
+                sys.stderr.flush()
+            finally:
+                os._exit(code)
+        self.running[pid] = path
+
+    def _reap_oldest(self) -> None:
+        pid = next(iter(self.running))
+        path = self.running.pop(pid)
+        _, status = os.waitpid(pid, 0)
+        if os.waitstatus_to_exitcode(status) != 0:
+            self.failed.append(path.name)
+
+    def finish(self) -> None:
+        while self.running:
+            self._reap_oldest()
+        if self.failed:
+            raise FigureError(f"could not draw {', '.join(self.failed)} (see the traceback "
+                              f"above; {PROCESSES_ENV}=0 draws in the main process)")
+
+    def abort(self) -> None:
+        for pid in self.running:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        for pid in self.running:
+            with contextlib.suppress(ChildProcessError):
+                os.waitpid(pid, 0)
+        self.running.clear()
+
+
+_BACKGROUND: _Background | None = None
+
+
+@contextlib.contextmanager
+def figures_in_background(processes: int | None = None):
+    """Within the block, :func:`save` draws in up to ``processes`` child processes (default
+    :func:`figure_processes`; 0, or already inside such a block: in this process). Leaving
+    the block waits for every figure and raises :class:`FigureError` if one failed; an
+    exception in the block kills the children before it propagates."""
+    global _BACKGROUND
+    n = figure_processes() if processes is None else int(processes)
+    if n <= 0 or _BACKGROUND is not None or not hasattr(os, "fork"):
+        yield
+        return
+    _BACKGROUND = bg = _Background(n)
+    try:
+        try:
+            yield
+        except BaseException:
+            bg.abort()
+            raise
+        bg.finish()
+    finally:
+        bg.abort()
+        _BACKGROUND = None
