@@ -391,9 +391,14 @@ def test_an_interrupt_kills_the_figure_processes(tmp_path):
             os.waitpid(pid, os.WNOHANG)
 
 
-@pytest.mark.parametrize("text, n", [("", 1), ("0", 0), ("3", 3), ("-2", 0), ("many", 1)])
+@pytest.mark.parametrize("text, n", [("", 2), ("0", 0), ("3", 3), ("-2", 0), ("many", 2)])
 def test_figure_processes_from_the_environment(monkeypatch, text, n):
+    import os
+
     from flexlift.output.plots._style import PROCESSES_ENV, figure_processes
 
     monkeypatch.setenv(PROCESSES_ENV, text)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
     assert figure_processes() == n
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})  # one core: no use
+    assert figure_processes() == (0 if text in ("", "many") else n)

@@ -140,15 +140,19 @@ PROCESSES_ENV = "FLEXLIFT_FIGURE_PROCESSES"
 
 def figure_processes() -> int:
     """How many figures ``flexlift run`` draws at once in child processes: the environment's
-    ``FLEXLIFT_FIGURE_PROCESSES`` (0: none, every figure in the main process), by default 1
-    (on a 2-core machine, the main process and one figure process), 0 without ``fork``."""
+    ``FLEXLIFT_FIGURE_PROCESSES`` (0: none, every figure in the main process); by default 2
+    where this process may use two cores or more (the figures are two thirds of the work:
+    two figure processes keep both cores busy while the main one computes), else 0; always
+    0 without ``fork``."""
     if not hasattr(os, "fork"):
         return 0
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    default = 2 if (cores or 1) >= 2 else 0
     text = os.environ.get(PROCESSES_ENV, "").strip()
     try:
-        return max(0, int(text)) if text else 1
+        return max(0, int(text)) if text else default
     except ValueError:
-        return 1
+        return default
 
 
 class FigureError(RuntimeError):
