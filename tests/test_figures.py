@@ -393,12 +393,15 @@ def test_an_interrupt_kills_the_figure_processes(tmp_path):
 
 @pytest.mark.parametrize("text, n", [("", 2), ("0", 0), ("3", 3), ("-2", 0), ("many", 2)])
 def test_figure_processes_from_the_environment(monkeypatch, text, n):
+    """Set, or by default two where two cores are free, none on one core or a busy machine."""
     import os
 
     from flexlift.output.plots._style import PROCESSES_ENV, figure_processes
 
     monkeypatch.setenv(PROCESSES_ENV, text)
-    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1})
-    assert figure_processes() == n
-    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})  # one core: no use
-    assert figure_processes() == (0 if text in ("", "many") else n)
+    default = text in ("", "many")
+    for cores, load, expected in (({0, 1}, 0.5, n), ({0}, 0.0, 0), ({0, 1, 2, 3}, 3.5, 0),
+                                  ({0, 1, 2, 3}, 2.5, 2)):
+        monkeypatch.setattr(os, "sched_getaffinity", lambda pid, c=cores: c)
+        monkeypatch.setattr(os, "getloadavg", lambda ld=load: (ld, ld, ld))
+        assert figure_processes() == (expected if default else n)

@@ -7,15 +7,16 @@ which was half of the time of ``flexlift run``. Each save is one draw at ``savef
 Inside :func:`figures_in_background` (``flexlift run`` uses it) :func:`save` hands the drawing
 and writing of each PNG to a forked child process and returns at once, so the figures are
 drawn while the next stage computes; at most :func:`figure_processes` children run at a
-time, and leaving the block waits for them all (an error in one is raised there; an
-exception or Ctrl-C in the block kills them first). ``FLEXLIFT_FIGURE_PROCESSES=0`` (or a
-platform without ``fork``) draws every figure in the calling process, as the single-stage
-commands always do.
+time (by default two where two cores are free, none on a busy machine), and leaving the
+block waits for them all (an error in one is raised there; an exception or Ctrl-C in the
+block kills them first). ``FLEXLIFT_FIGURE_PROCESSES=0`` (or a platform without ``fork``)
+draws every figure in the calling process, as the single-stage commands always do.
 """
 
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import signal
 import sys
@@ -141,18 +142,24 @@ PROCESSES_ENV = "FLEXLIFT_FIGURE_PROCESSES"
 def figure_processes() -> int:
     """How many figures ``flexlift run`` draws at once in child processes: the environment's
     ``FLEXLIFT_FIGURE_PROCESSES`` (0: none, every figure in the main process); by default 2
-    where this process may use two cores or more (the figures are two thirds of the work:
-    two figure processes keep both cores busy while the main one computes), else 0; always
-    0 without ``fork``."""
+    where this process may use two cores or more and the machine's load leaves one of them
+    free (the figures are two thirds of the work: two figure processes and the main one
+    keep two cores busy), else 0: on a busy machine they would only compete, and each
+    copy-on-write page and cold cache of a child costs CPU time. Always 0 without ``fork``."""
     if not hasattr(os, "fork"):
         return 0
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    default = 2 if (cores or 1) >= 2 else 0
     text = os.environ.get(PROCESSES_ENV, "").strip()
+    if text:
+        try:
+            return max(0, int(text))
+        except ValueError:
+            pass
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     try:
-        return max(0, int(text)) if text else default
-    except ValueError:
-        return default
+        load = os.getloadavg()[0]
+    except OSError:
+        load = 0.0
+    return 2 if (cores or 1) >= 2 and load <= (cores or 1) - 1 else 0
 
 
 class FigureError(RuntimeError):
@@ -173,12 +180,19 @@ class _Background:
             self._reap_oldest()
         sys.stdout.flush()
         sys.stderr.flush()  # the child must not write the parent's pending output again
-        with warnings.catch_warnings():  # Python >= 3.12 warns of BLAS's idle threads
-            warnings.simplefilter("ignore", DeprecationWarning)
-            pid = os.fork()
+        gc.freeze()  # the child's collector then leaves the parent's objects (and pages) alone
+        pid = -1
+        try:
+            with warnings.catch_warnings():  # Python >= 3.12 warns of BLAS's idle threads
+                warnings.simplefilter("ignore", DeprecationWarning)
+                pid = os.fork()
+        finally:
+            if pid != 0:
+                gc.unfreeze()
         if pid == 0:  # the child: draw, write, leave without running the parent's cleanup
             code = 1
             try:
+                gc.disable()  # short-lived: no collection copying shared pages
                 signal.signal(signal.SIGINT, signal.SIG_DFL)
                 signal.signal(signal.SIGTERM, signal.SIG_DFL)
                 fig = make()
@@ -219,6 +233,24 @@ class _Background:
 _BACKGROUND: _Background | None = None
 
 
+def _warm_up() -> None:
+    """Draw a small figure here once, so that every figure process inherits matplotlib's
+    caches warm (the fonts loaded, their glyphs and text layouts, the mathtext parser of the
+    log-axis labels) instead of rebuilding them in each child."""
+    import io
+
+    fig, ax = new_figure()
+    ax.semilogy([1.0, 2.0], [1e-3, 1e3], label="x")
+    ax.set_title("Warm-up 0123456789", fontweight="bold")
+    ax.set_xlabel("time [s]")
+    ax.legend()
+    try:
+        with plt.rc_context(STYLE):
+            fig.savefig(io.BytesIO(), format="png")
+    finally:
+        plt.close(fig)
+
+
 @contextlib.contextmanager
 def figures_in_background(processes: int | None = None):
     """Within the block, :func:`save` draws in up to ``processes`` child processes (default
@@ -230,6 +262,7 @@ def figures_in_background(processes: int | None = None):
     if n <= 0 or _BACKGROUND is not None or not hasattr(os, "fork"):
         yield
         return
+    _warm_up()
     _BACKGROUND = bg = _Background(n)
     try:
         try:
