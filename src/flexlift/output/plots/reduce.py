@@ -44,7 +44,9 @@ def plot_gains(sys: ModalStateSpace, gains: np.ndarray, omega_lo: float, title: 
     colors = np.where(rigid, "C3", "C0")
     step = max(1, labels.size // 24)
     ax[0].bar(pos, g, color=colors)
-    ax[0].set_xticks(pos[::step], [_short(s) for s in labels[::step]], fontsize=6.5)
+    turn = 90 if labels.size > 12 else 0  # upright numbers would run into each other
+    ax[0].set_xticks(pos[::step], [_short(s) for s in labels[::step]], fontsize=6.5,
+                     rotation=turn)
     ax[0].set(yscale="log", xlabel="mode (h, p: heave, pitch; then flexible 1, 2, ...)",
               ylabel="gain [m/N]", title="gain by mode")
     f = sys.omega / (2 * np.pi)
@@ -54,10 +56,11 @@ def plot_gains(sys: ModalStateSpace, gains: np.ndarray, omega_lo: float, title: 
                   label=f"rigid: |G_i| at ω_lo = {omega_lo / (2 * np.pi):.2f} Hz")
     ax[1].set(xscale="log", yscale="log", xlabel="frequency [Hz] (rigid at ω_lo)",
               ylabel="gain [m/N]", title="gain against frequency")
-    ax[1].legend(loc="lower left")
+    ax[1].legend(loc="upper right", fontsize=7.5)  # high gains sit at low frequencies
     order = np.argsort(-np.nan_to_num(g, nan=0.0), kind="stable")
     ax[2].bar(pos, g[order], color=colors[order])
-    ax[2].set_xticks(pos[::step], [_short(s) for s in labels[order][::step]], fontsize=6.5)
+    ax[2].set_xticks(pos[::step], [_short(s) for s in labels[order][::step]], fontsize=6.5,
+                     rotation=turn)
     ax[2].set(yscale="log", xlabel="mode, largest gain first", ylabel="gain [m/N]",
               title="sorted gains")
     if title:
