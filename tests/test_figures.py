@@ -130,6 +130,8 @@ def test_gain_figure_names_modes_as_everywhere(bag_models):
     assert labels[:5] == ["h", "p", "1", "2", "3"] and labels[-1] == "22"
     assert "heave, pitch" in fig.axes[0].get_xlabel()
     _texts_inside(fig, _drawn(fig))
+    decades = [t.get_text() for t in fig.axes[0].get_yticklabels() if t.get_text()]
+    assert "10⁻⁹" in decades and not any("$" in t for t in decades)  # plain text, no mathtext
     plt.close(fig)
 
 
