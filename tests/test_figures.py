@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from flexlift.output.plots import ascent
-from flexlift.output.plots._style import apply_margins
+from flexlift.output.plots._style import prepare
 from flexlift.output.plots.loads import load_diagram, shear_moment_figure
 from flexlift.output.plots.reduce import bode_phase, plot_bode, plot_gains, plot_time
 
 
 def _drawn(fig):
     """Lay out (as the saver does) and draw ``fig``; return its renderer."""
-    apply_margins(fig)
+    prepare(fig)
     fig.canvas.draw()
     return fig.canvas.get_renderer()
 

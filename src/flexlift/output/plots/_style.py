@@ -114,13 +114,19 @@ def lean_log_axes(ax, max_decades: float = 4.0) -> None:
             axis.set_major_locator(LogLocator(numticks=7))
 
 
+def prepare(fig) -> None:
+    """What a save does before drawing: the margins (:func:`apply_margins`) and the log axes
+    (:func:`lean_log_axes`)."""
+    apply_margins(fig)
+    for ax in fig.axes:
+        lean_log_axes(ax)
+
+
 def _write(fig, path: Path) -> None:
     """Lay out and draw ``fig`` into ``path`` atomically (one draw)."""
     from flexlift.output.files import atomic_file
 
-    apply_margins(fig)
-    for ax in fig.axes:
-        lean_log_axes(ax)
+    prepare(fig)
     with atomic_file(path, suffix=".png") as tmp, plt.rc_context(STYLE):
         fig.savefig(tmp, format="png")
 
