@@ -1,5 +1,6 @@
 """`flexlift fuzzy`: JSON grid and point evaluation, files, .fis input, bad input."""
 
+import csv
 import json
 import re
 import subprocess
@@ -66,6 +67,16 @@ def test_summary_files_and_run_stage(tmp_path, capsys, tanker):
                      "fuzzy_surface_contour.png"]
     assert all(f.path.stat().st_size > 10_000 for f in res.figures)
     assert (tmp_path / "tables" / "fuzzy_rules.csv").read_text().startswith("e \\ edot,NB,")
+    rules, sets = res.tables
+    assert rules.in_report and rules.csv == "fuzzy_rules.csv"
+    # the 21 membership functions go to their CSV, not the page, with every parameter
+    assert not sets.in_report and sets.csv == "fuzzy_sets.csv"
+    rows = list(csv.reader((tmp_path / "tables" / "fuzzy_sets.csv").open()))
+    assert rows[0] == ["variable", "set", "type", "parameters"] and len(rows) == 1 + 21
+    fis = supervisor_fis()
+    mf = fis.inputs[0].mfs[3]
+    assert rows[4][:3] == [fis.inputs[0].name, mf.name, mf.kind]
+    assert [float(p) for p in rows[4][3].split()] == pytest.approx(list(mf.params), rel=1e-5)
     d = _json(capsys, ["fuzzy", "--json"])
     assert d == json.loads(json.dumps(res.summary))
 

@@ -1,5 +1,6 @@
 """``flexlift reduce``: JSON summary, output files, and one-line errors with exit code 2."""
 
+import csv as _csv
 import json
 
 import pytest
@@ -19,11 +20,12 @@ def _json(capsys, argv):
 def test_json_every_external_bag(capsys):
     s = _json(capsys, ["reduce", "--json"])
     assert s["states_full"] == 48 and s["states_reduced"] == 4 and s["order"] == 2
-    assert sorted(s["gain_order"]) == list(range(1, 25))
+    labels = ["heave", "pitch"] + [str(k) for k in range(1, 23)]
+    assert s["mode_labels"] == labels and sorted(s["gain_order"]) == sorted(labels)
     assert set(s["methods"]) == set(METHODS)
     for m in s["methods"].values():
         assert {"dc_error_pct", "peak_error_pct"} <= set(m)
-        assert m["modes"] == [1, 2]
+        assert m["modes"] == ["heave", "pitch"]
     assert list(s["bags"]) == ["bag_1", "bag_2", "bag_3", "bag_4"]
     # the top level describes the first bag
     assert s["bag"] == "bag_1" and s["methods"] == s["bags"]["bag_1"]["methods"]
@@ -43,9 +45,11 @@ def test_json_one_bag_higher_order(capsys):
     s = _json(capsys, ["reduce", "--bag", "bag_2", "--order", "5", "--json"])
     assert list(s["bags"]) == ["bag_2"] and s["bag"] == "bag_2"
     assert s["states_reduced"] == 10
-    assert s["kept_modes"]["unsorted"] == [1, 2, 3, 4, 5]
-    assert 5 not in s["kept_modes"]["sorted"]  # bag_2 sits on a node of mode 5
-    assert s["gain_order"][:4] == sorted(s["gain_order"][:4])  # rigid, then flexible 1, 2
+    assert s["kept_modes"]["unsorted"] == ["heave", "pitch", "1", "2", "3"]
+    # bag_2 sits on a node of flexible mode 3 (lift.layout_flexible_mode): no gain there
+    assert "3" not in s["kept_modes"]["sorted"] and "4" in s["kept_modes"]["sorted"]
+    assert s["gain_order"][:4] == ["heave", "pitch", "1", "2"]
+    assert s["bags"]["bag_2"]["methods"]["sorted_mdc"]["modes"] == s["kept_modes"]["sorted"]
 
 
 def test_internal_bag_and_other_output(capsys):
@@ -62,7 +66,15 @@ def test_run_stage_writes_figures_and_tables(tmp_path, tanker):
         assert f.path.stat().st_size > 10_000 and f.caption
     csv = (tmp_path / "tables" / "reduce_comparison.csv").read_text().splitlines()
     assert len(csv) == 1 + len(METHODS)
-    assert (tmp_path / "tables" / "reduce_gains.csv").read_text().count("\n") == 25
+    assert "heave, pitch; flexible 1" in csv[1]
+    gains = list(_csv.reader((tmp_path / "tables" / "reduce_gains.csv").open()))
+    assert gains[0] == ["mode", "kind", "frequency [Hz]", "bag_1 [m/N]"]
+    assert len(gains) == 25 and [r[0] for r in gains[1:4]] == ["heave", "pitch", "1"]
+    assert [r[1] for r in gains[1:4]] == ["rigid", "rigid", "flexible"]
+    assert [float(r[3]) for r in gains[1:]] == pytest.approx(res.summary["gains_m_per_N"])
+    comparison, per_mode = res.tables
+    assert comparison.in_report and comparison.csv == "reduce_comparison.csv"
+    assert not per_mode.in_report and per_mode.csv == "reduce_gains.csv"
     assert "ω_lo" in res.tables[0].note and "most accurate" in res.summary["conclusion"]
 
 

@@ -60,3 +60,26 @@ def test_summary_is_json(short):
     json.dumps(s, allow_nan=False)
     assert set(s["arrival_time_s"]) == set(s["final_height_m"]) == set(short.dataset.bag.values)
     assert all(isinstance(v, bool) for v in s["criteria"].values())
+
+
+def _csv_value_by_value(cols, arr) -> str:
+    """The writer as it was (one f-string per value): the reference for the fast one."""
+    lines = [",".join(cols)]
+    for row in arr:
+        lines.append(",".join("" if not np.isfinite(v) else f"{v:.6g}" for v in row))
+    return "\n".join(lines) + "\n"
+
+
+def test_csv_writer_writes_what_it_wrote_value_by_value(short):
+    from flexlift.output.results import _csv
+
+    rng = np.random.default_rng(3)
+    arr = rng.standard_normal((50, 6)) * 10.0 ** rng.integers(-12, 12, (50, 6))
+    arr[3, 2], arr[7, 0], arr[7, 5], arr[9, 1] = np.nan, np.inf, -np.inf, -0.0
+    arr[11] = np.nan
+    cols = [f"c{k}" for k in range(6)]
+    assert _csv(cols, arr) == _csv_value_by_value(cols, arr)
+    assert _csv(cols, arr[:0]) == "c0,c1,c2,c3,c4,c5\n"
+    ds = short.dataset
+    real = np.column_stack([ds.time.values, ds.heave.values, ds.height.values])
+    assert _csv(["a"] * real.shape[1], real) == _csv_value_by_value(["a"] * real.shape[1], real)

@@ -116,3 +116,64 @@ def test_stage_subset(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["stages"]) == {"modes", "loads"}
     assert (out / "report.html").is_file()
+
+
+# ----------------------------------------------------------------------------- the report
+def _visible_text(html_text: str) -> str:
+    import html
+    import re
+
+    body = re.sub(r"<style>.*?</style>", " ", html_text, flags=re.S)
+    body = re.sub(r'src="data:[^"]*"', "", body)
+    return html.unescape(re.sub(r"<[^>]+>", " ", body))
+
+
+def test_long_tables_are_linked_csv_files_not_on_the_page(tanker_run):
+    import csv
+    import re
+
+    text = (tanker_run / "report.html").read_text()
+    links = re.findall(r'<a href="([^"#][^"]*)"', text)
+    assert {"tables/reduce_gains.csv", "tables/fuzzy_sets.csv",
+            "tables/modes_frequencies.csv"} <= set(links)
+    for href in links:  # every link of the report points into its own output folder
+        assert (tanker_run / href).is_file(), href
+    headers = re.findall(r"<thead>(.*?)</thead>", text)
+    assert not any("bag_1 [m/N]" in h or ">parameters<" in h for h in headers)
+    gains = list(csv.reader((tanker_run / "tables/reduce_gains.csv").open()))
+    assert len(gains) == 1 + 24 and len(gains[0]) == 3 + 4  # 24 modes x 4 external bags
+    sets = list(csv.reader((tanker_run / "tables/fuzzy_sets.csv").open()))
+    assert len(sets) == 1 + 21
+    assert "24 rows × 7 columns" in _visible_text(text)
+    assert "21 rows × 4 columns" in _visible_text(text)
+
+
+def test_print_css_keeps_headings_with_what_follows(tanker_run):
+    import re
+
+    text = (tanker_run / "report.html").read_text()
+    css = re.search(r"<style>(.*?)</style>", text, flags=re.S).group(1)
+    rules: dict[str, str] = {}
+    for sels, body in re.findall(r"([^{}]+)\{([^}]*)\}", css):
+        for sel in sels.split(","):
+            rules[sel.strip()] = rules.get(sel.strip(), "") + body
+    for h in ("h1", "h2", "h3"):
+        assert "break-after: avoid" in rules[h] and "page-break-after: avoid" in rules[h]
+    for block in ("figure", "table", ".keep"):
+        assert "break-inside: avoid" in rules[block]
+    # every table title travels with its table
+    for title in re.findall(r"<h3>[^<]*</h3><table>", text):
+        assert f'<div class="keep">{title}' in text
+
+
+def test_one_mode_numbering_and_one_time_unit(tanker_run):
+    import re
+
+    text = _visible_text((tanker_run / "report.html").read_text())
+    numbered = re.findall(r"(\w+ )mode (\d+)", text)
+    assert numbered and all(word == "flexible " for word, _ in numbered), numbered
+    assert "flexible mode 3" in text and "(lift.layout_flexible_mode)" in text
+    # modes listed only up to those 11 elements resolve (1..5), the rule stated
+    assert "flexible mode 5" in text and "flexible mode 6" not in text and "N/2" in text
+    assert "[min]" not in text and "minute" not in text
+    assert re.search(r"60 s before the first separation", text)

@@ -202,6 +202,18 @@ def static_correction(shape_p: np.ndarray, om2_e: np.ndarray, strip_gen: np.ndar
     return scaled @ strip_gen, scaled @ bag_gen, scaled @ weight_gen
 
 
+def wet_beam(scenario, hull: Hull):
+    """The hull as it moves in water: (its beam with the added mass a33 = C_a rho pi B^2 / 4
+    and the entrained water spread over the length added to the structural mass, that extra
+    mass per length [kg/m]). The coupled plant integrates this beam's modes (the wet modes);
+    the modal stage reports their frequencies beside the dry ones."""
+    env, hy = scenario.environment, scenario.hydro
+    mass_line = (hydro.added_mass_per_length(hull.breadth, env.seawater_density_kg_m3,
+                                             hy.added_mass_coefficient)
+                 + hy.entrained_water_t * C.TONNE / hull.length)
+    return assemble(hull, extra_mass_per_length=mass_line), mass_line
+
+
 def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = None) -> Plant:
     """The coupled plant of ``scenario``: the wet hull, its bags and one holding group."""
     env, hy, sim = scenario.environment, scenario.hydro, scenario.simulation
@@ -209,9 +221,7 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     if plan is None:
         plan = plan_lift(scenario, hull)
     rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
-    mass_line = (hydro.added_mass_per_length(hull.breadth, rho, hy.added_mass_coefficient)
-                 + hy.entrained_water_t * C.TONNE / hull.length)
-    beam = assemble(hull, extra_mass_per_length=mass_line)
+    beam, mass_line = wet_beam(scenario, hull)
     # the retained modes plus 10 more for the static correction of the eliminated ones (their
     # share falls as 1 / omega^2); all of them on the tanker's 11 elements
     n_modes = min(beam.n_dof, max(MODES_FOR_CORRECTION, 2 + sim.retained_flexible_modes + 10))

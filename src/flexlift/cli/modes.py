@@ -40,6 +40,10 @@ def add_parser(sub) -> None:
     p.set_defaults(func=_main)
 
 
+#: flexible modes printed at most
+CLI_MODES = 10
+
+
 def _main(args) -> int:
     scenario = scenario_from(args)
     with writing(args.out, "modes") as out:
@@ -57,14 +61,23 @@ def _main(args) -> int:
         w(f"  only {s['modes_resolved']} of the {s['modes_requested']} requested modes are "
           "resolved to Phi^T M Phi = I, Phi^T K Phi = diag(omega^2); ask for fewer\n")
     fa = s["analytic_hz"] or []
-    for i in range(s["rigid_modes"], min(len(f), s["rigid_modes"] + 10)):
-        j = i - s["rigid_modes"]
+    fw = s["wet_frequencies_hz"]
+    nr = s["rigid_modes"]
+    w(f"  {', '.join(s['mode_labels'][:nr])}: rigid, 0 Hz\n")
+    n_res = s["mesh_resolved_flexible_modes"]
+    shown = nr + min(n_res, CLI_MODES)
+    for i in range(nr, shown):
+        j = i - nr
         ref = f"  (analytic {fa[j]:.4f})" if j < len(fa) else ""
-        nodes = s["mode_nodes"].get(str(i + 1))
+        wet = f"  wet {fw[i]:10.4f} Hz" if fw[i] is not None else ""
+        nodes = s["mode_nodes"].get(s["mode_labels"][i])
         at = f"  nodes {nodes}" if nodes else ""
-        w(f"  mode {i + 1:3d}: {f[i]:12.4f} Hz{ref}{at}\n")
-    if len(f) > s["rigid_modes"] + 10:
-        w(f"  ... {len(f) - s['rigid_modes'] - 10} more (see --json)\n")
+        w(f"  flexible mode {s['mode_labels'][i]:>3s}: dry {f[i]:12.4f} Hz{wet}{ref}{at}\n")
+    if nr + n_res > shown:
+        w(f"  ... flexible modes {shown - nr + 1} to {n_res}, also resolved (see --json)\n")
+    if len(f) > nr + n_res:
+        w(f"  flexible modes {n_res + 1} to {len(f) - nr}: computed, beyond what "
+          f"{s['elements']} elements resolve (mode k <= N/2; see --json)\n")
     c = s.get("convergence")
     if c:
         rates = ", ".join("n/a" if r is None else f"{r:.2f}" for r in c["rates"])

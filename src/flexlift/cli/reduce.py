@@ -6,7 +6,8 @@ an internal bag the displacement averaged over its span). Without --bag every ex
 reduced (every bag if there are none) and the top-level JSON keys describe the first of them;
 with --bag only that bag. --order is the number of modes kept (default 2: the rigid modes,
 the 4-state model). Errors are in percent; frequencies in Hz unless the key says rad_s;
-mode numbers are 1-based (1 = heave, 2 = pitch).
+modes are named as everywhere: "heave", "pitch", then flexible modes "1", "2", ... (flexible
+mode 1 is the first flexible mode, as lift.layout_flexible_mode counts them).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from flexlift.dynamics.reduce import (
     DEFAULT_ORDER,
     METHODS,
 )
+from flexlift.output.modenames import mode_list
 from flexlift.stages.reduce import NAME, run_stage
 
 
@@ -59,10 +61,11 @@ def _main(args) -> int:
     w(f"{scenario.name}: {s['states_full']}-state modal models reduced to {s['order']} modes "
       f"({s['states_reduced']} states); ω_lo = {s['omega_lo_hz']:.3g} Hz\n")
     for name, b in s["bags"].items():
-        w(f"  {name} ({b['input']} -> {b['output']}), gain order {b['gain_order'][:6]}...\n")
+        w(f"  {name} ({b['input']} -> {b['output']}), largest gains first: "
+          f"{mode_list(b['gain_order'][:6])}, ...\n")
         for m in METHODS:
             e = b["methods"][m]
-            w(f"    {m:13s} modes {str(e['modes']):18s} gain error {e['dc_error_pct']:+8.3f} %  "
+            w(f"    {m:13s} modes {mode_list(e['modes']):30s} gain error {e['dc_error_pct']:+8.3f} %  "
               f"peak error {e['peak_error_pct']:+8.3f} %\n")
     w(s["conclusion"] + "\n")
     for f in res.figures:

@@ -23,7 +23,6 @@ Positions are in metres anywhere along the hull; nothing is snapped to the mesh.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import minimize
 
 from flexlift.loads.strength import shear_moment
 
@@ -97,6 +96,8 @@ def refine(x, q, points, start: np.ndarray, bag_lift: float, x_target_moment: fl
     kept at ``x_target_moment`` [N m] (their lift centroid on the centre of gravity)."""
     if start.size > MAX_REFINED:
         return start  # SLSQP's dense steps grow as n^3: the equal-load centroids stand
+    from scipy.optimize import minimize  # here: importing it costs 0.3 s, most runs never do
+
     x = np.asarray(x, dtype=float)
     _, M0 = static_moment(x, q, points, [], bag_lift)  # the moment without the bags
 

@@ -29,11 +29,13 @@ body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; max-width: 60re
 h1 { font-size: 1.6rem; border-bottom: 3px solid #1f4e79; padding-bottom: .3rem; }
 h2 { font-size: 1.25rem; color: #1f4e79; margin-top: 2.2rem; border-bottom: 1px solid #c9d3e0; }
 h3 { font-size: 1.05rem; margin-bottom: .3rem; }
+h1, h2, h3 { break-after: avoid; page-break-after: avoid; }
 table { border-collapse: collapse; margin: .6rem 0 1rem; font-size: .88rem; }
+table, tr, figure, .keep { break-inside: avoid; page-break-inside: avoid; }
 th, td { border: 1px solid #c9d3e0; padding: .25rem .55rem; text-align: right; }
 th { background: #eef3f9; text-align: center; }
 td:first-child, th:first-child { text-align: left; }
-figure { margin: 1rem 0; page-break-inside: avoid; }
+figure { margin: 1rem 0; }
 figure img { max-width: 100%; border: 1px solid #e1e6ee; }
 figcaption { font-size: .85rem; color: #4a5568; }
 .pass { color: #17703a; font-weight: bold; }
@@ -68,10 +70,26 @@ def _cell(v) -> str:
 
 
 def _table(t) -> str:
+    if not t.in_report:
+        return _csv_only(t)
     head = "".join(f"<th>{_e(c)}</th>" for c in t.columns)
     body = "".join("<tr>" + "".join(f"<td>{_cell(v)}</td>" for v in row) + "</tr>" for row in t.rows)
-    note = f'<p class="meta">{_e(t.note)}</p>' if t.note else ""
-    return f"<h3>{_e(t.title)}</h3><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>{note}"
+    link = (f' Also as <a href="tables/{_e(t.csv)}"><code>tables/{_e(t.csv)}</code></a>.'
+            if t.csv else "")
+    note = f'<p class="meta">{_e(t.note)}{link}</p>' if t.note or link else ""
+    # the title stays with its table when printed (and the heading never ends a page)
+    return (f'<div class="keep"><h3>{_e(t.title)}</h3><table><thead><tr>{head}</tr></thead>'
+            f"<tbody>{body}</tbody></table>{note}</div>")
+
+
+def _csv_only(t) -> str:
+    """A table left off the page: one line linking its CSV file (relative to the report, in
+    the same output folder) with its size."""
+    if not t.csv:
+        return ""
+    href = f"tables/{t.csv}"
+    return (f'<p class="meta csv">{_e(t.title)}: {len(t.rows)} rows × {len(t.columns)} '
+            f'columns, in <a href="{_e(href)}"><code>{_e(href)}</code></a>.</p>')
 
 
 def _figure(fig) -> str:

@@ -64,7 +64,17 @@ def to_csv(result: Result, folder, prefix: str = "simulate") -> list[Path]:
 
 
 def _csv(cols, arr) -> str:
-    lines = [",".join(cols)]
-    for row in arr:
-        lines.append(",".join("" if not np.isfinite(v) else f"{v:.6g}" for v in row))
-    return "\n".join(lines) + "\n"
+    """CSV text: a header line, then each row's values as ``%.6g``, with an empty field for
+    NaN or infinity. The whole table is formatted by one ``%`` on a template of every row
+    (and the non-finite fields blanked by a replacement), not value by value."""
+    arr = np.asarray(arr, dtype=float)
+    head = ",".join(cols) + "\n"
+    if not arr.size:
+        return head
+    n_rows, n_cols = arr.shape
+    body = ((",".join(["%.6g"] * n_cols) + "\n") * n_rows) % tuple(arr.ravel().tolist())
+    if not np.isfinite(arr).all():
+        # %.6g writes only digits, "-", "." and "e" for a finite value: "nan", "inf" and
+        # "-inf" can only be whole fields
+        body = body.replace("-inf", "").replace("inf", "").replace("nan", "")
+    return head + body

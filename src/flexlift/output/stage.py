@@ -18,12 +18,18 @@ class Figure:
 
 @dataclass(frozen=True)
 class Table:
-    """A table for the report and CSV: a title, column names (with units), and rows."""
+    """A table for the report and CSV: a title, column names (with units), and rows.
+
+    csv : the file name under ``tables/`` the stage writes it to ("" when none)
+    in_report : False for a table too long for the page (the report names its CSV instead)
+    """
 
     title: str
     columns: list[str]
     rows: list[list]
     note: str = ""
+    csv: str = ""
+    in_report: bool = True
 
     def to_csv(self) -> str:
         """The table as CSV text: a header of the column names, then the rows (None -> empty)."""

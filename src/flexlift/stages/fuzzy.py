@@ -60,7 +60,7 @@ def _rule_table(fis: FIS) -> Table:
         if complete:
             rows = [[a.mfs[i].name, *cells[i]] for i in reversed(range(len(a.mfs)))]
             return Table(f"Rule table: {fis.output.name} by {a.name} (rows) and {b.name} (columns)",
-                         [f"{a.name} \\ {b.name}", *b.labels], rows,
+                         [f"{a.name} \\ {b.name}", *b.labels], rows, csv="fuzzy_rules.csv",
                          note=f"{fis.and_method}/{fis.or_method} inference, "
                               f"{fis.implication} implication, {fis.aggregation} aggregation, "
                               f"{fis.defuzzification} on {fis.resolution} points")
@@ -72,14 +72,16 @@ def _rule_table(fis: FIS) -> Table:
                 for i, n, v in zip(r.consequents, r.consequents_negated, fis.outputs)
                 if i is not None]
         rows.append([k, f" {r.connective.upper()} ".join(parts), ", ".join(then), r.weight])
-    return Table(f"Rules of {fis.name!r}", ["rule", "if", "then", "weight"], rows)
+    return Table(f"Rules of {fis.name!r}", ["rule", "if", "then", "weight"], rows,
+                 csv="fuzzy_rules.csv", in_report=len(rows) <= 25)
 
 
 def _sets_table(fis: FIS) -> Table:
     rows = [[v.name, m.name, m.kind, " ".join(f"{p:.6g}" for p in m.params)]
             for v in (*fis.inputs, *fis.outputs) for m in v.mfs]
     return Table("Membership functions (MATLAB parameter order)",
-                 ["variable", "set", "type", "parameters"], rows)
+                 ["variable", "set", "type", "parameters"], rows, csv="fuzzy_sets.csv",
+                 in_report=False)
 
 
 def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = None,
@@ -139,7 +141,7 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
 
 def _write(out: Path, fis: FIS, tables: list[Table], scenario=None) -> list[Figure]:
     """Figures and tables of ``fis``; with ``scenario``, its fill map as well."""
-    from flexlift.output.plots._style import save
+    from flexlift.output.plots._style import draw
     from flexlift.output.plots.fuzzy import (
         plot_map,
         plot_memberships,
@@ -148,29 +150,29 @@ def _write(out: Path, fis: FIS, tables: list[Table], scenario=None) -> list[Figu
     )
 
     fdir, tdir = out / "figures", out / "tables"
-    figures = [Figure(save(plot_memberships(fis), fdir / "fuzzy_memberships.png"),
+    figures = [Figure(draw(fdir / "fuzzy_memberships.png", plot_memberships, fis),
                       f"Membership functions of the {fis.name} inputs and output.")]
     if fis.n_inputs == 2 and fis.n_outputs == 1:
         g = grid_values(fis, PLOT_GRID)
         labels = (fis.inputs[0].name, fis.inputs[1].name, fis.output.name)
         u = np.array(g["u"])
         figures.append(Figure(
-            save(plot_surface_3d(g["ze"], g["w"], u, labels, title=f"Control surface of {fis.name}"), fdir / "fuzzy_surface_3d.png"),
+            draw(fdir / "fuzzy_surface_3d.png", plot_surface_3d, g["ze"], g["w"], u, labels,
+                 title=f"Control surface of {fis.name}"),
             f"Control surface {labels[2]}({labels[0]}, {labels[1]}) by exact inference."))
         centres = [[m.params[1] if m.kind == "gaussmf" else np.nan for m in v.mfs]
                    for v in fis.inputs]
         figures.append(Figure(
-            save(plot_surface_contour(g["ze"], g["w"], u, labels, centres=centres,
-                                      title=f"Control surface of {fis.name}"),
-                 fdir / "fuzzy_surface_contour.png"),
+            draw(fdir / "fuzzy_surface_contour.png", plot_surface_contour, g["ze"], g["w"], u,
+                 labels, centres=centres, title=f"Control surface of {fis.name}"),
             "Control surface as contours; the black line is u = 0."))
     if scenario is not None:  # the fill map the simulation uses (built in or the user's)
         fill = fill_map_of(scenario)
         d = np.linspace(-1.0, 1.0, 401)
-        figures.append(Figure(save(plot_map(d, fill(d)), fdir / "fuzzy_fill_map.png"),
+        figures.append(Figure(draw(fdir / "fuzzy_fill_map.png", plot_map, d, fill(d)),
                               "SIFSMC fill map: signed distance d to the fill fraction of "
                               "Q_in,max (zero for d <= 0)."))
-    write_text(tdir / "fuzzy_rules.csv", tables[0].to_csv())
-    write_text(tdir / "fuzzy_sets.csv", tables[1].to_csv())
+    for t in tables:
+        write_text(tdir / t.csv, t.to_csv())
     write_text(out / "fuzzy_supervisor.fis", to_fis_text(fis))
     return figures

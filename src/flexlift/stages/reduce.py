@@ -26,6 +26,7 @@ from flexlift.dynamics.statespace import (
 )
 from flexlift.loads.liftplan import plan_lift
 from flexlift.output.files import write_text
+from flexlift.output.modenames import labels_of_numbers, mode_list
 from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.structure.hull import hull_from_scenario
 from flexlift.structure.modes import compute_modes
@@ -72,6 +73,7 @@ def bag_summary(scenario, modes, bag, order: int, output: str | None = None, bag
     cmp = compare(models, w_lo)
     gains = mode_gains(full, w_lo)
     static = flexible_dc_gain(full)[0, 0]
+    labels = labels_of_numbers(full.mode_numbers, full.n_rigid)
     summary = {
         "bag": bag.name,
         "input": full.inputs[0],
@@ -83,10 +85,12 @@ def bag_summary(scenario, modes, bag, order: int, output: str | None = None, bag
         "omega_lo_hz": w_lo / TWO_PI,
         "band_hz": [cmp.band[0] / TWO_PI, cmp.band[1] / TWO_PI],
         "resonance_hz": None if cmp.resonance_omega is None else cmp.resonance_omega / TWO_PI,
-        "gain_order": [int(full.mode_numbers[k]) for k in gain_ranking(full, w_lo)],
+        # modes by label, as everywhere: "heave", "pitch", then flexible mode "1", "2", ...
+        "mode_labels": labels,
+        "gain_order": [labels[k] for k in gain_ranking(full, w_lo)],
         "gains_m_per_N": [float(g) for g in gains],
         "kept_modes": {
-            o: [int(full.mode_numbers[k]) for k in kept_modes(full, order, o, w_lo)]
+            o: [labels[k] for k in kept_modes(full, order, o, w_lo)]
             for o in ("unsorted", "sorted")
         },
         "flexible_static_gain_m_per_N": float(static),
@@ -96,7 +100,7 @@ def bag_summary(scenario, modes, bag, order: int, output: str | None = None, bag
                 "peak_error_pct": r.peak_error_pct,
                 "resonance_error_pct": r.resonance_error_pct,
                 "states": r.states,
-                "modes": list(r.modes),
+                "modes": labels_of_numbers(r.modes, full.n_rigid),
                 "flexible_static_gain_m_per_N": float(flexible_dc_gain(models[r.name])[0, 0]),
             }
             for r in cmp.rows
@@ -136,7 +140,7 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
     summary = dict(per_bag[bags[0].name])
     summary["bags"] = per_bag
     rows = [
-        [name, m, s["states_reduced"], " ".join(map(str, s["methods"][m]["modes"])),
+        [name, m, s["states_reduced"], mode_list(s["methods"][m]["modes"]),
          s["methods"][m]["dc_error_pct"], s["methods"][m]["peak_error_pct"],
          s["methods"][m]["resonance_error_pct"]]
         for name, s in per_bag.items() for m in METHODS
@@ -147,21 +151,24 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
         ["bag", "method", "states", "kept modes", "gain error at ω_lo [%]",
          "peak magnitude error [%]", "error at the first resonance [%]"],
         rows,
+        csv="reduce_comparison.csv",
         note=(f"ω_lo = {summary['omega_lo_hz']:.3g} Hz (one tenth of the first flexible "
               f"frequency); peak over {summary['band_hz'][0]:.3g}..{summary['band_hz'][1]:.4g} Hz; "
               "signed: negative means the reduced model is low; the last column is the "
               f"error at the full model's largest resonance ({summary['resonance_hz'] or 0:.3g} Hz)."),
     )
     gains_table = Table(
-        "Per-mode gain (flexible: dc gain; rigid: gain at ω_lo) [m/N]",
-        ["mode", "frequency [Hz]"] + list(per_bag),
-        [[k + 1, float(modes.frequencies_hz[k])] + [s["gains_m_per_N"][k] for s in per_bag.values()]
-         for k in range(modes.n_modes)],
+        "Per-mode gain of each bag's model (flexible: dc gain; rigid: gain at ω_lo) [m/N]",
+        ["mode", "kind", "frequency [Hz]"] + [f"{b} [m/N]" for b in per_bag],
+        [[summary["mode_labels"][k], "rigid" if k < modes.n_rigid else "flexible",
+          float(modes.frequencies_hz[k])]
+         + [s["gains_m_per_N"][k] for s in per_bag.values()] for k in range(modes.n_modes)],
+        csv="reduce_gains.csv", in_report=False,
     )
     figures: list[Figure] = []
     if out is not None:
         from flexlift.dynamics.reduce import band_grid
-        from flexlift.output.plots._style import save
+        from flexlift.output.plots._style import draw
         from flexlift.output.plots.reduce import plot_bode, plot_gains, plot_time
 
         b, models, cmp, gains = first
@@ -169,21 +176,22 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
         fdir, tdir = Path(out) / "figures", Path(out) / "tables"
         what = f"{b.name}: {full.inputs[0]} → {full.outputs[0]}"
         figures.append(Figure(
-            save(plot_gains(full, gains, cmp.omega_lo, what), fdir / "reduce_gains.png"),
-            f"Per-mode gain of {what}: against mode number, against frequency and sorted "
-            "(flexible modes: dc gain; rigid modes: gain at ω_lo)."))
+            draw(fdir / "reduce_gains.png", plot_gains, full, gains, cmp.omega_lo, what),
+            f"Per-mode gain of {what}: by mode (heave, pitch, flexible modes 1, 2, ...), "
+            "against frequency and sorted (flexible modes: dc gain; rigid modes: gain at "
+            "ω_lo)."))
         w = band_grid(full, cmp.omega_lo / 2, 3000)
         figures.append(Figure(
-            save(plot_bode(models, w, f"Bode, {what}"), fdir / "reduce_bode.png"),
+            draw(fdir / "reduce_bode.png", plot_bode, models, w, f"Bode, {what}"),
             f"Bode magnitude and phase of the full and the four {order}-mode models, {what}."))
         f1 = float(full.omega[~full.rigid].min()) / TWO_PI
         t = np.linspace(0.0, 10.0 / f1, 2001)
         figures.append(Figure(
-            save(plot_time(models, t, f"Time responses, {what}"), fdir / "reduce_time.png"),
+            draw(fdir / "reduce_time.png", plot_time, models, t, f"Time responses, {what}"),
             f"Step and impulse responses of the full and reduced models, {what}; right: with "
             "the rigid-body motion subtracted, leaving the flexible response."))
-        write_text(tdir / "reduce_comparison.csv", table.to_csv())
-        write_text(tdir / "reduce_gains.csv", gains_table.to_csv())
+        for t in (table, gains_table):
+            write_text(tdir / t.csv, t.to_csv())
     criteria = {"mdc_static_gain_exact": all(_mdc_exact(s) for s in per_bag.values())}
     return StageOutput(name=NAME, summary=summary, figures=figures, tables=[table, gains_table],
                        criteria=criteria)

@@ -37,7 +37,14 @@ def run_all(
     """Run ``stages`` into the folder ``out`` (already created); return their outputs.
     ``progress``: an object with ``stage(k, n, text)`` and ``bar(fraction, label)`` (the CLI's
     progress display), or None."""
+    from flexlift.output.plots._style import figures_in_background
+
     progress = progress or _Silent()
+    with figures_in_background():  # figures drawn while the next stage computes
+        return _run_stages(scenario, out, stages, controls, progress)
+
+
+def _run_stages(scenario, out: Path, stages, controls, progress) -> list[StageOutput]:
     outputs: list[StageOutput] = []
     n = len(stages)
     for k, name in enumerate(stages, start=1):

@@ -18,7 +18,7 @@ MODES = typing.get_args(ControlMode)
 
 def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
     from flexlift.output.plots import ascent
-    from flexlift.output.plots._style import save
+    from flexlift.output.plots._style import draw
     from flexlift.output.results import save_netcdf, to_csv
 
     save_netcdf(result, out / "data" / f"simulate_{mode}.nc")
@@ -27,13 +27,17 @@ def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
     to_csv(result, out / "tables", prefix=f"simulate_{mode}")
     figs = []
     fd = out / "figures"
-    figs.append(Figure(save(ascent.bag_histories(result), fd / f"simulate_{mode}_bags.png"),
-                       f"Height, ascent velocity, pitch angle, pitch rate and net gas flow of every bag ({mode} control)."))
-    figs.append(Figure(save(ascent.hull_motion(result), fd / f"simulate_{mode}_hull.png"),
-                       f"Hull heave and pitch ({mode} control)."))
+    window = ascent.window_text(result)
+    figs.append(Figure(draw(fd / f"simulate_{mode}_bags.png", ascent.bag_histories, result),
+                       f"Height, ascent velocity, pitch angle, pitch rate and net gas flow of "
+                       f"every bag ({mode} control), {window}; above them the heights over "
+                       "the whole run. Time in seconds from the start of filling."))
+    figs.append(Figure(draw(fd / f"simulate_{mode}_hull.png", ascent.hull_motion, result),
+                       f"Hull heave and pitch ({mode} control), {window}."))
     if "x" in result.dataset.coords:
-        figs.append(Figure(save(ascent.moment_map(result), fd / f"simulate_{mode}_moment.png"),
-                           f"Bending-moment envelope and its history along the hull ({mode} control)."))
+        figs.append(Figure(draw(fd / f"simulate_{mode}_moment.png", ascent.moment_map, result),
+                           f"Bending-moment envelope over the whole run and the bending "
+                           f"moment along the hull in time, {window} ({mode} control)."))
     return figs
 
 
@@ -99,7 +103,7 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
 def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
     """One figure comparing the control modes simulated into ``out`` by :func:`run_stage`."""
     from flexlift.output.plots import ascent
-    from flexlift.output.plots._style import save
+    from flexlift.output.plots._style import draw
     from flexlift.output.results import load_netcdf
 
     modes = [o.name.split(":", 1)[1] for o in outputs]
@@ -116,8 +120,9 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
     figures = []
     if out is not None:
         results = [load_netcdf(Path(out) / "data" / f"simulate_{m}.nc") for m in modes]
-        path = save(ascent.compare(results), Path(out) / "figures" / "simulate_compare.png")
-        figures.append(Figure(path, f"Control modes compared: {', '.join(modes)}."))
+        path = draw(Path(out) / "figures" / "simulate_compare.png", ascent.compare, results)
+        figures.append(Figure(path, f"Control modes compared: {', '.join(modes)}; time in "
+                                    "seconds, from 60 s before the first separation."))
     summary = {m: {k: o.summary[k] for k in ("max_pitch_deg", "max_ascent_velocity_ms", "arrival_spread_s")}
                for m, o in zip(modes, outputs)}
     return StageOutput(name="compare", summary=summary, figures=figures, tables=[table])

@@ -1,4 +1,10 @@
-"""Figures of a simulated ascent (take a :class:`~flexlift.ascent.result.Result`, return a figure)."""
+"""Figures of a simulated ascent (take a :class:`~flexlift.ascent.result.Result`, return a figure).
+
+Time is in seconds everywhere (as in the events, the criteria and the CSV). The time
+histories show the ascent itself, from :data:`BEFORE_SEPARATION_S` before the first
+separation to the end of the run (:func:`zoom_window`): the filling and the wait for breakout
+before it (half an hour on the tanker) are one overview panel of the bags' heights.
+"""
 
 from __future__ import annotations
 
@@ -13,52 +19,108 @@ _PANELS = (
     ("pitch_rate", 180 / np.pi, "pitch rate [deg/s]"),
     ("net_flow", 1.0, "net flow [m³/s]"),
 )
+#: the zoomed time histories start this long before the first separation [s]
+BEFORE_SEPARATION_S = 60.0
+_TIME = "time [s]"
+
+
+def zoom_window(result) -> tuple[float, float]:
+    """(start, end) of the zoomed time histories [s]: from :data:`BEFORE_SEPARATION_S`
+    before the first separation (never before 0) to the end of the run; the whole run when
+    the hull never separated."""
+    t = result.dataset.time.values
+    end = float(t[-1]) if t.size else 0.0
+    sep = result.event_time("separation")
+    if sep is None:
+        return 0.0, end
+    return max(0.0, float(sep) - BEFORE_SEPARATION_S), end
+
+
+def window_text(result) -> str:
+    """The zoom window in words, for captions."""
+    t0, t1 = zoom_window(result)
+    if result.event_time("separation") is None:
+        return f"the whole run, 0 to {t1:.0f} s (the hull never separated)"
+    return (f"{t0:.0f} to {t1:.0f} s: from {BEFORE_SEPARATION_S:.0f} s before the first "
+            "separation to the end of the run")
+
+
+def _in(t: np.ndarray, t0: float, t1: float) -> np.ndarray:
+    """Indices of ``t`` in [t0, t1] plus one sample either side (the curve reaches the edge)."""
+    i0 = max(int(np.searchsorted(t, t0, side="right")) - 1, 0)
+    i1 = min(int(np.searchsorted(t, t1, side="left")) + 1, t.size)
+    return slice(i0, i1)
 
 
 def _event_lines(ax, result, kinds=("separation", "breakout")):
     for e in result.events:
         if e["kind"] in kinds:
-            ax.axvline(e["time_s"] / 60, color="0.6", lw=0.7, ls=":")
+            ax.axvline(e["time_s"], color="0.45", lw=0.7, ls=":")
+
+
+def _bag_styles(ds):
+    return ["-" if k == "external" else "--" for k in ds.bag_kind.values]
 
 
 def bag_histories(result):
     """The paper's five time histories for every bag (height, ascent velocity, pitch angle,
-    pitch rate, net flow), against time in minutes."""
+    pitch rate, net flow) over :func:`zoom_window`, under an overview of the heights over the
+    whole run with that window shaded."""
     ds = result.dataset
-    fig, axes = new_figure(5, 1, figsize=(8.0, 10.0), sharex=True)
-    t = ds.time.values / 60
-    for ax, (name, scale, label) in zip(axes, _PANELS):
-        for k, b in enumerate(ds.bag.values):
-            ls = "-" if ds.bag_kind.values[k] == "external" else "--"
-            ax.plot(t, ds[name].values[:, k] * scale, ls, lw=1.0, label=str(b))
+    t = ds.time.values
+    t0, t1 = zoom_window(result)
+    fig, axes = new_figure(6, 1, figsize=(8.0, 11.0), height_ratios=[0.7, 1, 1, 1, 1, 1],
+                           margins={"top": 0.45, "hgap": 0.5})
+    styles = _bag_styles(ds)
+    over = axes[0]
+    for k, b in enumerate(ds.bag.values):
+        over.plot(t, ds.height.values[:, k], styles[k], lw=1.0, label=str(b))
+    over.axvspan(t0, t1, color="C0", alpha=0.07, lw=0)
+    over.set_xlim(0.0, max(t1, 1e-9))
+    over.set_ylabel("height [m]\n(whole run)")
+    over.set_xlabel(_TIME, labelpad=1)
+    over.legend(ncols=4, loc="upper left", fontsize=7.5)
+    _event_lines(over, result)
+    w = _in(t, t0, t1)
+    for ax, (name, scale, label) in zip(axes[1:], _PANELS):
+        for k in range(ds.bag.size):
+            ax.plot(t[w], ds[name].values[w, k] * scale, styles[k], lw=1.0)
         ax.set_ylabel(label)
+        ax.set_xlim(t0, t1)
         _event_lines(ax, result)
-    axes[0].legend(ncol=4, loc="upper left")
-    axes[-1].set_xlabel("time [min]")
-    axes[0].set_title(f"Bag histories, {result.control} control (dotted: separation, breakout)")
+    for ax in axes[1:-1]:
+        ax.tick_params(labelbottom=False)
+    axes[-1].set_xlabel(_TIME)
+    over.text(0.5 * (t0 + t1), 0.25, "shown below", transform=over.get_xaxis_transform(),
+              ha="center", va="center", fontsize=8, color="C0")
+    over.set_title(f"Bag histories, {result.control} control (dotted: separation, breakout)")
     return fig
 
 
 def hull_motion(result):
-    """Hull heave and pitch against time."""
+    """Hull heave and pitch over :func:`zoom_window`."""
     ds = result.dataset
+    t = ds.time.values
+    t0, t1 = zoom_window(result)
+    w = _in(t, t0, t1)
     fig, (a1, a2) = new_figure(2, 1, figsize=(8.0, 5.0), sharex=True)
-    t = ds.time.values / 60
-    a1.plot(t, ds.heave.values)
+    a1.plot(t[w], ds.heave.values[w])
     a1.set_ylabel("heave [m]")
-    a2.plot(t, np.degrees(ds.pitch.values))
+    a2.plot(t[w], np.degrees(ds.pitch.values[w]))
     a2.set_ylabel("pitch [deg, bow up]")
-    a2.set_xlabel("time [min]")
+    a2.set_xlabel(_TIME)
+    a2.set_xlim(t0, t1)
     for ax in (a1, a2):
         _event_lines(ax, result)
-    a1.set_title(f"Hull heave and pitch, {result.control} control")
+    a1.set_title(f"Hull heave and pitch, {result.control} control, {t0:.0f} to {t1:.0f} s")
     return fig
 
 
 def moment_map(result):
-    """Bending-moment envelope along the hull and a time-x map of the bending moment."""
+    """Bending-moment envelope along the hull (the whole run) and a time-x map of the
+    bending moment over :func:`zoom_window`."""
     ds = result.dataset
-    fig, (a1, a2) = new_figure(1, 2, figsize=(10.0, 4.2))
+    fig, (a1, a2) = new_figure(1, 2, figsize=(10.0, 4.2), margins={"wgap": 0.9, "right": 0.3})
     x = ds.x.values
     a1.fill_between(x, ds.moment_min.values / 1e6, ds.moment_max.values / 1e6, alpha=0.3,
                     label="envelope")
@@ -66,29 +128,36 @@ def moment_map(result):
     a1.plot(x, ds.moment_min.values / 1e6, lw=1)
     a1.set_xlabel("x from the aft end [m]")
     a1.set_ylabel("bending moment [MN m, sagging +]")
-    a1.set_title("Bending-moment envelope")
+    a1.set_title("Bending-moment envelope, whole run")
+    ts = ds.time_strength.values
+    t0, t1 = zoom_window(result)
+    w = _in(ts, t0, t1)
     M = ds.bending_moment.values / 1e6
     lim = float(np.abs(M).max()) or 1.0
-    mesh = a2.pcolormesh(x, ds.time_strength.values / 60, M, cmap="RdBu_r", vmin=-lim, vmax=lim,
-                         shading="nearest")
-    fig.colorbar(mesh, ax=a2, label="MN m")
+    mesh = a2.pcolormesh(x, ts[w], M[w], cmap="RdBu_r", vmin=-lim, vmax=lim,
+                         shading="nearest", rasterized=True)
+    fig.colorbar(mesh, ax=a2, label="MN m", pad=0.02)
     a2.set_xlabel("x from the aft end [m]")
-    a2.set_ylabel("time [min]")
+    a2.set_ylabel(_TIME)
     a2.set_title(f"Bending moment in time, {result.control} control")
+    a2.grid(False)
     return fig
 
 
 def compare(results):
-    """Several control modes on one figure: mean height, hull pitch, fastest bag velocity,
-    and the bending-moment envelopes."""
-    fig, axes = new_figure(2, 2, figsize=(10.0, 6.5))
+    """Several control modes on one figure: mean height, hull pitch, fastest bag velocity over
+    the union of their zoom windows, and the bending-moment envelopes."""
+    fig, axes = new_figure(2, 2, figsize=(10.0, 6.8), margins={"wgap": 0.9, "hgap": 0.8})
     (a1, a2), (a3, a4) = axes
+    windows = np.array([zoom_window(r) for r in results])
+    t0, t1 = float(windows[:, 0].min()), float(windows[:, 1].max())
     for r in results:
         ds = r.dataset
-        t = ds.time.values / 60
-        a1.plot(t, ds.heave.values, label=r.control)
-        a2.plot(t, np.degrees(ds.pitch.values), label=r.control)
-        a3.plot(t, np.abs(ds.ascent_velocity.values).max(axis=1), label=r.control)
+        t = ds.time.values
+        w = _in(t, t0, t1)
+        a1.plot(t[w], ds.heave.values[w], label=r.control)
+        a2.plot(t[w], np.degrees(ds.pitch.values[w]), label=r.control)
+        a3.plot(t[w], np.abs(ds.ascent_velocity.values[w]).max(axis=1), label=r.control)
         if "x" in ds.coords:
             a4.plot(ds.x.values, np.maximum(np.abs(ds.moment_max.values),
                                             np.abs(ds.moment_min.values)) / 1e6, label=r.control)
@@ -97,8 +166,10 @@ def compare(results):
     a3.set_ylabel("fastest bag point [m/s]")
     a4.set_ylabel("|bending moment| envelope [MN m]")
     for ax in (a1, a2, a3):
-        ax.set_xlabel("time [min]")
+        ax.set_xlabel(_TIME)
+        ax.set_xlim(t0, t1)
     a4.set_xlabel("x from the aft end [m]")
     a1.legend()
-    a1.set_title("Control modes compared")
+    a1.set_title(f"Control modes compared, {t0:.0f} to {t1:.0f} s")
+    a4.set_title("Bending-moment envelopes, whole run")
     return fig

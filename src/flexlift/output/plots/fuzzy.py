@@ -55,7 +55,7 @@ def plot_surface_3d(x0, x1, u, labels=("e", "edot", "u"), title="Control surface
 def plot_surface_contour(x0, x1, u, labels=("e", "edot", "u"), title="Control surface",
                          centres=None):
     """The control surface as filled contours, with the rule grid (set centres) if given."""
-    fig, ax = new_figure(figsize=(6.5, 5.2))
+    fig, ax = new_figure(figsize=(6.5, 5.4), margins={"top": 0.6, "right": 0.3})
     X0, X1 = np.meshgrid(x0, x1, indexing="ij")
     levels = np.linspace(min(-1.0, u.min()), max(1.0, u.max()), 21)
     cs = ax.contourf(X0, X1, u, levels=levels, cmap="coolwarm")
@@ -68,7 +68,7 @@ def plot_surface_contour(x0, x1, u, labels=("e", "edot", "u"), title="Control su
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     ax.set_aspect("equal")
-    ax.set_title(title + " (black: u = 0; dots: rule centres)")
+    ax.set_title(title + "\n(black: u = 0; dots: rule centres)", pad=8)
     return fig
 
 

@@ -7,8 +7,9 @@ save it with :func:`flexlift.output.plots._style.save`.
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.ticker import NullFormatter, ScalarFormatter
+from matplotlib.ticker import MaxNLocator, NullFormatter, ScalarFormatter
 
+from flexlift.output.modenames import mode_title
 from flexlift.output.plots._style import new_figure
 from flexlift.structure.convergence import Convergence, is_uniform
 from flexlift.structure.modes import Modes, analytic_free_free_hz, mode_nodes, zero_crossings
@@ -17,9 +18,10 @@ _SAMPLES_PER_ELEMENT = 40
 _MAX_SAMPLES = 4001
 
 
-def plot_mode_shapes(modes: Modes, n_flex: int = 5):
-    """Unit-peak displacement of the first ``n_flex`` flexible modes along the hull, with the
-    beam nodes nearest each mode's zero crossings ("nodes of the mode") marked."""
+def plot_mode_shapes(modes: Modes, n_flex: int = 5, highlight: int | None = None):
+    """Unit-peak displacement of flexible modes 1..``n_flex`` along the hull, with the beam
+    nodes nearest each mode's zero crossings ("nodes of the mode") marked; the panel of
+    flexible mode ``highlight`` (the lift plan's layout mode, if any) is drawn bold."""
     hull = modes.hull
     n_flex = max(0, min(n_flex, modes.n_modes - modes.n_rigid))
     n_x = min(hull.n_elements * _SAMPLES_PER_ELEMENT + 1, _MAX_SAMPLES)
@@ -33,8 +35,9 @@ def plot_mode_shapes(modes: Modes, n_flex: int = 5):
         w = modes.shape_at(x, columns=col)[:, 0]
         peak = w[np.argmax(np.abs(w))]
         w = w / peak
+        bold = k == highlight
         ax.axhline(0.0, color="0.6", lw=0.8)
-        ax.plot(x, w, lw=1.6, color=f"C{k - 1}")
+        ax.plot(x, w, lw=2.4 if bold else 1.6, color=f"C{k - 1}")
         xz = zero_crossings(modes, col)
         ax.plot(xz, np.zeros_like(xz), "x", color="k", ms=5, label="zero crossing")
         nodes = mode_nodes(modes, col)
@@ -43,40 +46,50 @@ def plot_mode_shapes(modes: Modes, n_flex: int = 5):
         if hull.n_elements <= 60:
             ax.plot(xn, np.zeros_like(xn), "|", color="0.3", ms=6)
         ax.set_ylim(-1.25, 1.25)
-        ax.set_ylabel(f"mode {col + 1}\n{f[col]:.3g} Hz")
+        ax.set_ylabel(f"{mode_title(col, modes.n_rigid)}\n{f[col]:.3g} Hz",
+                      fontweight="bold" if bold else "normal")
         shown = ", ".join(str(n + 1) for n in nodes[:12]) + (" ..." if len(nodes) > 12 else "")
-        ax.set_title(f"nodes of mode {col + 1} (1-based): {shown}", loc="right", fontsize=8)
+        where = "; the external bags sit here" if bold else ""
+        ax.set_title(f"nodes (1-based): {shown}{where}", loc="right", fontsize=8,
+                     fontweight="bold" if bold else "normal")
     axes[0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=2, fontsize=7.5)
     fig.suptitle(
-        f"First {n_flex} flexible modes of the free-free hull (unit peak, "
+        f"Flexible modes 1 to {n_flex} of the free-free hull (dry, unit peak, "
         f"{hull.n_elements} elements; x = 0 aft)"
     )
     axes[-1].set_xlabel("x from the aft end [m]")
     return fig
 
 
-def plot_frequencies(modes: Modes):
-    """Natural frequency against mode number (flexible modes), with the analytic uniform-beam
-    values where the hull is uniform."""
+def plot_frequencies(modes: Modes, wet: Modes | None = None, n_shown: int | None = None):
+    """Natural frequency against flexible mode number 1..``n_shown`` (default: all computed),
+    dry and (given ``wet``) wet, with the analytic uniform-beam values where the hull is
+    uniform. Heave and pitch (0 Hz) are named in the corner, not drawn."""
     fig, ax = new_figure()
-    n = np.arange(1, modes.n_modes + 1)
-    flex = n > modes.n_rigid
-    f = modes.frequencies_hz
-    ax.plot(n[flex], f[flex], "o-", ms=4, label=f"FE, {modes.hull.n_elements} elements")
-    ax.plot(n[~flex], f[~flex], "s", ms=5, color="0.4", label="rigid modes (heave, pitch)")
+    nr = modes.n_rigid
+    n = modes.n_modes - nr if n_shown is None else min(n_shown, modes.n_modes - nr)
+    k = np.arange(1, n + 1)
+    f = modes.frequencies_hz[nr:nr + n]
+    ax.plot(k, f, "o-", ms=4, label=f"dry, FE {modes.hull.n_elements} elements")
+    if wet is not None:
+        m = min(n, wet.n_modes - wet.n_rigid)
+        ax.plot(k[:m], wet.frequencies_hz[wet.n_rigid:wet.n_rigid + m], "s--", ms=4,
+                color="C2", label="wet (added mass, entrained water)")
     if is_uniform(modes.hull):
-        k = min(5, int(flex.sum()))
-        fa = analytic_free_free_hz(modes.hull, k)
-        ax.plot(np.arange(3, 3 + k), fa, "x", ms=8, mew=2, color="C3",
-                label="analytic (uniform free-free beam)")
-    ax.set_xlabel("mode number (1, 2 rigid)")
+        ka = min(5, n)
+        ax.plot(k[:ka], analytic_free_free_hz(modes.hull, ka), "x", ms=8, mew=2, color="C3",
+                label="analytic, dry (uniform free-free beam)")
+    ax.set_xlabel("flexible mode")
+    if n <= 25:
+        ax.set_xticks(k)
+    else:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_ylabel("natural frequency [Hz]")
-    if f[flex].size and f[flex].max() / f[flex].min() > 50:
-        ax.set_yscale("log")  # the rigid modes (0 Hz) cannot show: say so
-        ax.text(0.98, 0.04, "modes 1-2: rigid (heave, pitch), 0 Hz", fontsize=8,
-                ha="right", color="0.3", transform=ax.transAxes)
-    ax.set_title("Natural frequencies of the free-free hull (dry)")
-    ax.legend()
+    ax.set_ylim(bottom=0)
+    ax.text(0.98, 0.04, "heave, pitch: rigid, 0 Hz", fontsize=8, ha="right", color="0.3",
+            transform=ax.transAxes)
+    ax.set_title("Natural frequencies of the free-free hull, dry and wet")
+    ax.legend(loc="upper left")
     return fig
 
 

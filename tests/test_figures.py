@@ -1,0 +1,409 @@
+"""The report's figures: what they draw (phase, loads, windows, labels), not only that a PNG
+appears. Each figure is built by the function the stages call and inspected through
+matplotlib's own objects (lines, texts and their drawn extents)."""
+
+import itertools
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from flexlift.output.plots import ascent
+from flexlift.output.plots._style import prepare
+from flexlift.output.plots.loads import load_diagram, shear_moment_figure
+from flexlift.output.plots.reduce import bode_phase, plot_bode, plot_gains, plot_time
+
+
+def _drawn(fig):
+    """Lay out (as the saver does) and draw ``fig``; return its renderer."""
+    prepare(fig)
+    fig.canvas.draw()
+    return fig.canvas.get_renderer()
+
+
+def _texts_inside(fig, renderer):
+    """Every visible, non-empty text of the figure lies inside the figure (no label cut off
+    by the fixed margins)."""
+    W, H = fig.bbox.width, fig.bbox.height
+    unseen = set()  # tick labels beyond an axis's view are not drawn
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            lo, hi = sorted(axis.get_view_interval())
+            tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                if not lo - tol <= tick.get_loc() <= hi + tol:
+                    unseen |= {id(tick.label1), id(tick.label2)}
+    bad = []
+    for t in fig.findobj(plt.Text):
+        if not t.get_visible() or not t.get_text().strip() or id(t) in unseen:
+            continue
+        bb = t.get_window_extent(renderer)
+        if bb.x0 < -1 or bb.y0 < -1 or bb.x1 > W + 1 or bb.y1 > H + 1:
+            bad.append((t.get_text()[:40], bb.bounds))
+    assert not bad, bad
+    _titles_clear(fig, renderer)
+
+
+def _titles_clear(fig, renderer):
+    """No axes title overlaps a drawn tick label, axis label or offset text of the figure."""
+    titles = [t for ax in fig.axes for t in (ax.title, ax._left_title, ax._right_title)
+              if t.get_text()]
+    others = []
+    for ax in [c for a in fig.axes for c in (a, *a.child_axes)]:  # secondary axes too
+        for axis in (ax.xaxis, ax.yaxis):
+            lo, hi = sorted(axis.get_view_interval())
+            others += [tk.label1 for tk in axis.get_major_ticks()
+                       if lo <= tk.get_loc() <= hi and tk.label1.get_visible()]
+            others += [tk.label2 for tk in axis.get_major_ticks()
+                       if lo <= tk.get_loc() <= hi and tk.label2.get_visible()]
+            others += [axis.label, axis.offsetText]
+    for t in titles:
+        tb = t.get_window_extent(renderer)
+        for o in others:
+            if o.get_visible() and o.get_text().strip():
+                assert not tb.overlaps(o.get_window_extent(renderer)), (t.get_text(), o.get_text())
+
+
+# ----------------------------------------------------------------------------- Bode phase
+def test_phase_of_one_damped_mode_falls_monotonically_to_minus_180():
+    w = np.geomspace(0.01, 100.0, 2000)
+    G = 1.0 / (1.0 - w**2 + 2j * 0.02 * w)
+    ph = bode_phase(G)
+    assert ph[0] == pytest.approx(0.0, abs=0.1) and ph[-1] == pytest.approx(-180.0, abs=0.1)
+    assert np.all(np.diff(ph) <= 1e-9)
+
+
+def test_phase_of_three_modes_goes_on_below_minus_180_without_jumps():
+    w = np.geomspace(0.01, 100.0, 4000)
+    G = 1.0 / ((1.0 - w**2 + 0.04j * w) * (4.0 - w**2 + 0.08j * w) * (9.0 - w**2 + 0.12j * w))
+    ph = bode_phase(G)
+    assert ph[-1] == pytest.approx(-540.0, abs=0.5)  # np.angle alone would wrap twice
+    assert np.all(np.diff(ph) <= 1e-9) and np.abs(np.diff(ph)).max() < 30
+
+
+def test_undamped_sign_change_rises_through_a_zero_and_falls_through_a_pole():
+    w = np.geomspace(0.1, 10.0, 1001)
+    # a reduced model's rigid part plus its mdc feedthrough: real, through zero at w = 1
+    ph = bode_phase(-1.0 / w**2 + 1.0 + 0j)
+    assert ph[0] == pytest.approx(-180.0) and ph[-1] == pytest.approx(0.0)
+    assert np.all(np.diff(ph) >= 0)
+    # an undamped mode: real, through a pole at w = 2 (not on a grid point)
+    ph = bode_phase(1.0 / (4.0 - w**2) + 0j)
+    assert ph[0] == pytest.approx(0.0) and ph[-1] == pytest.approx(-180.0)
+    assert np.all(np.diff(ph) <= 0)
+
+
+@pytest.fixture(scope="module")
+def bag_models(tanker, tanker_modes, tanker_plan):
+    from flexlift.dynamics.reduce import band_grid, reduce_all
+    from flexlift.dynamics.statespace import bag_siso, default_omega_lo
+
+    full = bag_siso(tanker_modes, tanker_plan.bag("bag_1"), 0.02, None, tanker_plan.bags)
+    w_lo = default_omega_lo(full)
+    return reduce_all(full, 2, w_lo), band_grid(full, w_lo / 2, 3000), w_lo
+
+
+def test_bode_figure_of_the_tanker(bag_models):
+    """Force to displacement at the same point (collocated): the full model's phase stays
+    within [-180, 0] deg, poles and zeros alternating; the 2-mode del model is the rigid body
+    alone (-180 throughout) and the mdc model rises once, through its zero, to 0."""
+    models, w, _ = bag_models
+    fig = plot_bode(models, w)
+    phase = {line.get_label(): line.get_ydata() for line in fig.axes[1].lines}
+    plt.close(fig)
+    assert set(phase) >= {"full", "unsorted del", "unsorted mdc", "sorted mdc"}
+    full = phase["full"]
+    assert full.min() > -180.5 and full.max() < 0.5
+    np.testing.assert_allclose(phase["unsorted del"], -180.0, atol=1e-6)
+    mdc = phase["unsorted mdc"]
+    assert mdc[0] == pytest.approx(-180.0) and mdc[-1] == pytest.approx(0.0, abs=1e-6)
+    assert np.all(np.diff(mdc) >= -1e-9)
+
+
+def test_gain_figure_names_modes_as_everywhere(bag_models):
+    from flexlift.dynamics.statespace import mode_gains
+
+    models, _, w_lo = bag_models
+    full = models["full"]
+    fig = plot_gains(full, mode_gains(full, w_lo), w_lo, "bag_1")
+    labels = [t.get_text() for t in fig.axes[0].get_xticklabels()]
+    assert labels[:5] == ["h", "p", "1", "2", "3"] and labels[-1] == "22"
+    assert "heave, pitch" in fig.axes[0].get_xlabel()
+    _texts_inside(fig, _drawn(fig))
+    decades = [t.get_text() for t in fig.axes[0].get_yticklabels() if t.get_text()]
+    assert "10⁻⁹" in decades and not any("$" in t for t in decades)  # plain text, no mathtext
+    plt.close(fig)
+
+
+def test_time_response_figure_fits(bag_models):
+    models, _, _ = bag_models
+    fig = plot_time(models, np.linspace(0.0, 2.0, 401))
+    _texts_inside(fig, _drawn(fig))
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- load diagram
+def _plan(scenario):
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.loads.strength import lift_load_case
+    from flexlift.structure.hull import hull_from_scenario
+
+    hull = hull_from_scenario(scenario)
+    plan = plan_lift(scenario, hull)
+    return hull, plan, lift_load_case(plan, hull)
+
+
+def _bag_labels(fig):
+    return [t for t in fig.findobj(plt.Text) if t.get_gid() == "bag-label"]
+
+
+def _assert_no_overlap(texts, renderer):
+    boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in texts]
+    for (a, ba), (b, bb) in itertools.combinations(boxes, 2):
+        assert not ba.overlaps(bb), (a, b)
+
+
+CROWDED = {"lift.bags": [
+    {"name": "a", "kind": "external", "x_m": 10.0, "lift_t": 400.0, "count": 3},
+    {"name": "b", "kind": "external", "x_m": 12.0, "lift_t": 400.0},
+    {"name": "c", "kind": "external", "x_m": 14.5, "lift_t": 400.0},
+    {"name": "d", "kind": "external", "x_m": 70.0, "lift_t": 400.0, "count": 2},
+    {"name": "e", "kind": "internal", "span_m": [20.0, 23.0], "lift_t": 300.0},
+    {"name": "f", "kind": "internal", "span_m": [23.0, 26.0], "lift_t": 300.0},
+    {"name": "g", "kind": "internal", "span_m": [26.0, 60.0], "lift_t": 300.0},
+]}
+
+
+@pytest.mark.parametrize("changes", [{}, CROWDED], ids=["tanker", "crowded"])
+def test_bag_labels_never_overlap(tanker, changes):
+    hull, plan, case = _plan(tanker.with_changes(**changes))
+    fig = load_diagram(hull, plan, case)
+    renderer = _drawn(fig)
+    labels = _bag_labels(fig)
+    text = " ".join(t.get_text() for t in labels)
+    for name in ("a_1..a_3", "3 × 400 t", "d_1..d_2", "b\n400 t", "e\n300 t", "g  300 t") \
+            if changes else [f"bag_{k}" for k in range(1, 8)]:
+        assert name in text
+    _assert_no_overlap(labels, renderer)
+    _texts_inside(fig, renderer)
+    plt.close(fig)
+
+
+def test_load_diagram_draws_the_real_weight(tanker):
+    """A hull heavier in its middle elements with two point masses: the drawn load curve
+    follows the load case's line load, each point mass is an arrow with its tonnes, and the
+    totals add up to the required lift's weight."""
+    mass = [30e3] * 3 + [60e3] * 5 + [30e3] * 3
+    sc = tanker.with_changes(**{"lift.layout": "balanced",
+                                "hull.displacement_t": None, "hull.mass_per_length_kg_m": mass,
+                                "hull.point_masses": [{"node": 2, "mass_t": 300.0},
+                                                      {"node": 10, "mass_t": 150.0}]})
+    hull, plan, case = _plan(sc)
+    g = plan.gravity
+    fig = load_diagram(hull, plan, case)
+    texts = [t.get_text() for t in fig.findobj(plt.Text)]
+    point = sorted(t.get_text() for t in fig.findobj(plt.Text) if t.get_gid() == "point-mass-label")
+    k = plan.breakout_factor * plan.wet_weight / plan.dry_weight
+    assert point == sorted(f"{k * m:.0f} t" for m in (300.0, 150.0))
+    total = -sum(d.resultant for d in case.line_loads if d.resultant < 0) - sum(
+        p.force for p in case.point_loads if p.force < 0)
+    summary = next(t for t in texts if t.startswith("downward"))
+    assert f"= {total / (1e3 * g):.0f} t" in summary and "point masses" in summary
+    distributed = -sum(d.resultant for d in case.line_loads if d.resultant < 0)
+    assert f"distributed {distributed / (1e3 * g):.0f} t" in summary
+    # the load curve: depth under the keel proportional to the line load
+    curve = max(fig.axes[0].lines, key=lambda ln: len(ln.get_xdata()))
+    x, y = curve.get_xdata(), curve.get_ydata()
+    element = np.clip((x / hull.element_length).astype(int), 0, hull.n_elements - 1)
+    depth = y.max() - y
+    inner = np.abs(x[:, None] - hull.x_nodes[None, :]).min(axis=1) > 1e-6
+    expected = np.array(mass)[element] / max(mass)
+    np.testing.assert_allclose(depth[inner] / depth.max(), expected[inner], atol=1e-9)
+    plt.close(fig)
+
+
+def test_shear_moment_figure_fits(tanker):
+    from flexlift.loads.strength import strength
+
+    hull, plan, case = _plan(tanker)
+    fig = shear_moment_figure(strength(case, hull, 20), hull, plan)
+    _texts_inside(fig, _drawn(fig))
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- time histories
+@pytest.fixture(scope="module")
+def short(tanker):
+    from flexlift.ascent import simulate
+
+    sc = tanker.with_changes(**{"control.target_height_m": 20.0, "seabed.breakout_time_s": 60.0,
+                                "simulation.hold_time_s": 30.0})
+    return simulate(sc, duration=900.0)
+
+
+def test_zoom_window_starts_a_minute_before_separation(short):
+    sep = short.event_time("separation")
+    t0, t1 = ascent.zoom_window(short)
+    assert sep is not None and t0 == pytest.approx(sep - 60.0)
+    assert t1 == pytest.approx(float(short.dataset.time.values[-1]))
+    assert f"{t0:.0f} to {t1:.0f} s" in ascent.window_text(short)
+
+
+def test_bag_histories_overview_then_zoom_in_seconds(short):
+    fig = ascent.bag_histories(short)
+    over, *zoomed = fig.axes
+    t0, t1 = ascent.zoom_window(short)
+    assert over.get_xlim() == pytest.approx((0.0, t1))
+    assert len(zoomed) == 5
+    for ax in zoomed:
+        assert ax.get_xlim() == pytest.approx((t0, t1))
+        t = ax.lines[0].get_xdata()
+        assert t[0] <= t0 + 1.0 and t[-1] >= t1 - 1.0 and t[1] > t0 - 1.5
+    assert over.get_xlabel() == zoomed[-1].get_xlabel() == "time [s]"
+    labels = [t.get_text() for t in over.get_legend().get_texts()]
+    assert labels == [f"bag_{k}" for k in range(1, 8)]
+    _texts_inside(fig, _drawn(fig))
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("name", ["hull_motion", "moment_map"])
+def test_other_histories_use_seconds_and_the_window(short, name):
+    fig = getattr(ascent, name)(short)
+    t0, t1 = ascent.zoom_window(short)
+    timed = [ax for ax in fig.axes if "time" in ax.get_xlabel() + ax.get_ylabel()]
+    assert timed
+    for ax in timed:
+        assert "[s]" in ax.get_xlabel() + ax.get_ylabel()
+        lim = ax.get_xlim() if "time" in ax.get_xlabel() else ax.get_ylim()
+        assert lim[0] >= t0 - 15.0 and lim[1] <= t1 + 15.0
+    _texts_inside(fig, _drawn(fig))
+    plt.close(fig)
+
+
+def test_never_separated_shows_the_whole_run(tanker):
+    from flexlift.ascent import simulate
+
+    r = simulate(tanker, duration=120.0)
+    assert r.event_time("separation") is None
+    assert ascent.zoom_window(r) == (0.0, pytest.approx(float(r.dataset.time.values[-1])))
+    assert "never separated" in ascent.window_text(r)
+
+
+# ----------------------------------------------------------------------------- modal figures
+def test_mode_figures_say_flexible_mode(tanker_modes):
+    from flexlift.output.plots.modes import plot_frequencies, plot_mode_shapes
+
+    fig = plot_mode_shapes(tanker_modes, 5, highlight=3)
+    ylabels = [ax.get_ylabel().splitlines()[0] for ax in fig.axes]
+    assert ylabels == [f"flexible mode {k}" for k in range(1, 6)]
+    assert fig.axes[2].get_ylabel().endswith("27.1 Hz")
+    assert "the external bags sit here" in fig.axes[2].get_title(loc="right")
+    _texts_inside(fig, _drawn(fig))
+    plt.close(fig)
+    fig = plot_frequencies(tanker_modes, None, 5)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "flexible mode"
+    assert list(ax.lines[0].get_xdata()) == [1, 2, 3, 4, 5]
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), tanker_modes.frequencies_hz[2:7])
+    plt.close(fig)
+
+
+def _fuzzy_figures():
+    from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis
+    from flexlift.output.plots import fuzzy
+    from flexlift.stages.fuzzy import grid_values
+
+    fis = supervisor_fis()
+    g = grid_values(fis, 21)
+    u = np.array(g["u"])
+    d = np.linspace(-1.0, 1.0, 101)
+    return [fuzzy.plot_memberships(fis),
+            fuzzy.plot_surface_contour(g["ze"], g["w"], u, title="Control surface of x"),
+            fuzzy.plot_map(d, fill_fis()(d))]
+
+
+def test_remaining_figures_fit(tanker_hull, tanker_modes, short):
+    """The fixed margins leave every text of every other report figure on the figure and no
+    title over a label."""
+    from flexlift.output.plots.modes import plot_convergence, plot_frequencies
+    from flexlift.structure.convergence import convergence_study
+
+    figs = [plot_convergence(convergence_study(tanker_hull)),
+            plot_frequencies(tanker_modes, tanker_modes, 5), ascent.compare([short, short]),
+            *_fuzzy_figures()]
+    for fig in figs:
+        _texts_inside(fig, _drawn(fig))
+        plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- figure processes
+def _plain_plot():
+    return plt.subplots()[0]
+
+
+def _failing_plot():
+    fig, ax = plt.subplots()
+    ax.set_title("$\\notacommand$")  # mathtext fails when drawn, not when set
+    return fig
+
+
+def test_figures_in_background_are_the_same_files(tanker, tmp_path):
+    """Drawn by child processes or in this one, the modes stage's PNG files are identical,
+    and all complete when the block ends."""
+    from flexlift.output.plots._style import figures_in_background
+    from flexlift.stages.modes import run_stage
+
+    with figures_in_background(0):
+        here = run_stage(tanker, tmp_path / "here")
+    with figures_in_background(2):
+        there = run_stage(tanker, tmp_path / "there")
+    assert [f.path.name for f in here.figures] == [f.path.name for f in there.figures]
+    for a, b in zip(here.figures, there.figures):
+        assert a.path.read_bytes() == b.path.read_bytes()
+
+
+def test_a_failed_figure_process_is_an_error_at_the_end(tmp_path):
+    from flexlift.output.plots import _style
+
+    ok = _style.draw(tmp_path / "plain.png", _plain_plot)  # no block: drawn here
+    assert ok.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(_style.FigureError, match="bad.png"):
+        with _style.figures_in_background(2):
+            _style.draw(tmp_path / "bad.png", _failing_plot)
+            _style.draw(tmp_path / "good.png", _plain_plot)
+    assert (tmp_path / "good.png").is_file() and not (tmp_path / "bad.png").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["good.png", "plain.png"]
+
+
+def test_an_interrupt_kills_the_figure_processes(tmp_path):
+    import os
+
+    from flexlift.output.plots import _style
+
+    pids = []
+    with pytest.raises(KeyboardInterrupt):
+        with _style.figures_in_background(2):
+            for k in range(2):
+                _style.draw(tmp_path / f"{k}.png", _plain_plot)
+            pids = list(_style._BACKGROUND.running)
+            raise KeyboardInterrupt
+    assert len(pids) == 2 and _style._BACKGROUND is None
+    for pid in pids:  # killed and reaped: no such child any more
+        with pytest.raises(ChildProcessError):
+            os.waitpid(pid, os.WNOHANG)
+
+
+@pytest.mark.parametrize("text, n", [("", 2), ("0", 0), ("3", 3), ("-2", 0), ("many", 2)])
+def test_figure_processes_from_the_environment(monkeypatch, text, n):
+    """Set, or by default two where two cores are free, none on one core or a busy machine."""
+    import os
+
+    from flexlift.output.plots._style import PROCESSES_ENV, figure_processes
+
+    monkeypatch.setenv(PROCESSES_ENV, text)
+    default = text in ("", "many")
+    for cores, load, expected in (({0, 1}, 0.5, n), ({0}, 0.0, 0), ({0, 1, 2, 3}, 3.5, 0),
+                                  ({0, 1, 2, 3}, 2.5, 2)):
+        monkeypatch.setattr(os, "sched_getaffinity", lambda pid, c=cores: c)
+        monkeypatch.setattr(os, "getloadavg", lambda ld=load: (ld, ld, ld))
+        assert figure_processes() == (expected if default else n)
