@@ -189,3 +189,11 @@ def test_an_external_bag_between_nodes_reduces_as_a_point_load(tanker):
         for n, x in (("a", 10.3), ("b", 31.7), ("c", 50.2), ("d", 70.9))]})
     out = run_stage(sc, None)
     assert out.summary and all(out.criteria.values()) or out.criteria == {}
+
+
+def test_a_plan_needing_absurdly_many_bags_is_refused_before_allocating(tanker):
+    from flexlift.loads.liftplan import MAX_BAGS, plan_lift
+
+    sc = tanker.with_changes(**{"lift.catalogue_bag.lift_t": 0.01})  # 3,617 t / 10 kg
+    with pytest.raises(InputError, match=f"at most {MAX_BAGS:,}"):
+        plan_lift(sc, hull_from_scenario(sc))

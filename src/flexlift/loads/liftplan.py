@@ -119,6 +119,10 @@ class LiftPlan:
         raise InputError("bag", name, f"known bags are {', '.join(b.name for b in self.bags)}")
 
 
+#: the most bags flexlift sizes for a plan (a long pipeline has a few hundred)
+MAX_BAGS = 2_000
+
+
 def bag_count(required_lift_t: float, catalogue_lift_t: float) -> tuple[int, float]:
     """The bag-count rule of SPEC §1: n = ceil(required / catalogue), and the modelled lift
     per bag = required / n rounded up to the tonne. Inputs and output lift in tonnes."""
@@ -150,6 +154,10 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
     required = lift.breakout_factor * wet
     cat = lift.catalogue_bag.lift_t * C.TONNE * g
     n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)
+    if lift.bags is None and n > MAX_BAGS:
+        raise InputError("lift.catalogue_bag.lift_t", lift.catalogue_bag.lift_t,
+                         f"the plan would need {n:,} bags of it for {required / (C.TONNE * g):,.0f} t; "
+                         f"at most {MAX_BAGS:,}: choose a larger catalogue bag")
     if lift.bag_lift_t is not None:
         per_t = lift.bag_lift_t
     per = per_t * C.TONNE * g
