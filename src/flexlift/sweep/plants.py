@@ -55,10 +55,16 @@ class _Reading:
         raise AttributeError("a scenario is read only")
 
 
+#: the value of a key inside an optional section the scenario does not have (``pipe.*``)
+_ABSENT = ("absent",)
+
+
 def _value(scenario, key: str):
     obj = scenario
     if key:
         for part in key.split("."):
+            if obj is None:
+                return _ABSENT
             obj = getattr(obj, part)
     return _canonical(obj)
 
