@@ -119,13 +119,20 @@ def test_reused_plants_are_the_plants_a_fresh_build_gives(tanker):
         same(plants.plant_for(s, "coordinated"), coupled_plant(s))
     same(plants.plant_for(tanker, "paper"), paper_plant(tanker))
     assert plants.stats()["plants"]["hits"] >= before + 3  # {} twice, current, pull
-    # a plant of a pipeline (keys of its pipe section) and a tanker (no pipe) side by side
+    # a plant of a pipeline (read from keys of its pipe section), then a tanker (no pipe)
     from flexlift.scenario import load_scenario
 
     line = load_scenario("pipeline").with_changes(**{"pipe.elements": 40})
-    same(plants.plant_for(line, "coordinated"), coupled_plant(line))
-    same(plants.plant_for(tanker, "coordinated"), coupled_plant(tanker))
-    same(plants.plant_for(line, "coordinated"), coupled_plant(line))
+    memo = plants.ReadMemo()
+
+    def build(view):
+        return coupled_plant(view), ()
+
+    pl, keys = memo.get(line, build)
+    assert any(k.startswith("pipe.") for k in keys)
+    same(pl, coupled_plant(line))
+    same(memo.get(tanker, build)[0], coupled_plant(tanker))
+    assert memo.get(line, build)[0] is pl and memo.hits == 1
 
 
 def test_reused_modes_are_the_modes_of_the_same_beam(tanker_hull):
