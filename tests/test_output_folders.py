@@ -262,3 +262,27 @@ def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, tmp_path):
         with output_folder(out, "run") as tmp:
             (tmp / "previous.txt").write_text("v2")
         assert _litter(tmp_path) == []
+
+
+def test_an_incremental_folder_removes_only_its_own_unchanged_files(tmp_path):
+    """remove_own (the sweep's stale rerun files): listed, a regular file, and holding what
+    the command wrote; an edited file, a link in its place or an unlisted file stays."""
+    from flexlift.output.files import write_text
+    from flexlift.output.folders import incremental_folder
+
+    out = tmp_path / "o"
+    with incremental_folder(out, "sweep", "id-1") as inc:
+        inc.claim("a.yaml", "b.yaml", "c.yaml")
+        for name in ("a.yaml", "b.yaml", "c.yaml"):
+            write_text(out / name, f"{name}\n")
+    (out / "b.yaml").write_text("edited by the user\n")
+    with incremental_folder(out, "sweep", "id-1") as inc:
+        (out / "c.yaml").unlink()  # (a link at open is refused outright; here one appears later)
+        (out / "c.yaml").symlink_to(out / "a.yaml")
+        assert inc.remove_own("a.yaml", b"a.yaml\n")
+        assert not inc.remove_own("b.yaml", b"b.yaml\n")  # edited: the user's now
+        assert not inc.remove_own("c.yaml", b"a.yaml\n")  # a link in its place
+        assert not inc.remove_own("d.yaml", b"")  # never listed
+    assert not (out / "a.yaml").exists()
+    assert (out / "b.yaml").read_text() == "edited by the user\n"
+    assert (out / "c.yaml").is_symlink()

@@ -295,6 +295,23 @@ class Incremental:
             self.listed |= new
             self._marker(complete=False)
 
+    def remove_own(self, rel: str, expected: bytes) -> bool:
+        """Remove the file ``rel`` only when it is this command's and unchanged: listed by the
+        marker, a regular file (not a link) and holding exactly ``expected`` (what the command
+        wrote there). Anything else is left as it is. Returns whether it was removed."""
+        full = self.path / rel
+        if rel not in self.listed or full.is_symlink() or not full.is_file():
+            return False
+        try:
+            if full.read_bytes() != expected:
+                return False  # edited since it was written: the user's now
+            full.unlink()
+        except OSError:
+            return False
+        self.listed.discard(rel)
+        self._marker(complete=False)
+        return True
+
     def finish(self, compact=None) -> None:
         """Mark the folder complete, listing everything in it; when that list would make the
         marker too large to be read back (:func:`read_marker`), the paths ``compact(relpath)``
@@ -362,7 +379,8 @@ def incremental_folder(target: str | os.PathLike, command: str, identity: str,
         temporary leftover of it)
 
     The folder is locked while open (a second run is refused). Nothing is removed but the
-    temporary leftovers of the command's own atomic writes; an exception leaves everything
+    temporary leftovers of the command's own atomic writes and, through
+    :meth:`Incremental.remove_own`, its own files left unchanged since it wrote them; an exception leaves everything
     written so far, with the marker saying ``complete: false`` (other commands refuse such a
     folder; a rerun of the same command and identity continues it).
     """

@@ -213,9 +213,11 @@ def _write_reruns(spec, cases, names, summary, folder) -> dict[int, str]:
     by_index = {c.index: c for c in cases}
     for i, rel in out.items():
         write_text(folder.path / rel, case_scenario(spec, by_index[i]).to_yaml())
+    index_of = {f"rerun/{names[c.index]}.yaml": c.index for c in cases}
     for rel in sorted(folder.listed()):
-        if rel.startswith("rerun/") and rel not in out.values() and (folder.path / rel).is_file():
-            (folder.path / rel).unlink()
+        i = index_of.get(rel)
+        if i is not None and rel not in out.values():  # an earlier run's, no longer wanted
+            folder.remove_own(rel, case_scenario(spec, by_index[i]).to_yaml().encode())
     return out
 
 

@@ -128,6 +128,10 @@ class SweepFolder:
     def listed(self) -> set[str]:
         return set(self.inc.listed)
 
+    def remove_own(self, rel: str, expected: bytes) -> bool:
+        """Remove a file of this sweep left unchanged since it wrote it (nothing else)."""
+        return self.inc.remove_own(rel, expected)
+
     def finish(self) -> None:
         """Mark the folder complete, listing every file in it (but the case files of a sweep
         too large for the marker to list them: they carry the SPEC's checksum)."""
