@@ -106,7 +106,7 @@ MUTATIONS = (
       "damping=scenario.hull.modal_damping * modes.omega[:nr]",
       "modal damping zeta omega instead of 2 zeta omega"),
     M("dry-weight-plant", "ascent/plant.py",
-      "strip_gen @ hydro.submerged_weight(hull.mass_per_length[el], g, rho, rho_s)",
+      "strip_gen @ hull.wet_weight_per_length(g, rho, rho_s)[el]",
       "strip_gen @ (hull.mass_per_length[el] * g)",
       "the simulated hull carries its dry weight (steel buoyancy lost)"),
     M("open-bag-relief", "ascent/plant.py",
@@ -327,6 +327,19 @@ def score(results) -> dict:
             "errors": [r.name for r in results if r.outcome == "error"]}
 
 
+def write_report(args, base, results, total: float, finished: bool) -> None:
+    """``args.json``: the code measured, the score so far and each mutant's outcome;
+    ``finished`` is false while mutants are still to run."""
+    report = {"code": measured_code(), "tests": list(args.tests),
+              "python": sys.version.split()[0], "finished": finished,
+              "unmutated_seconds": round(base.seconds, 1), "total_seconds": round(total, 1),
+              **score(results),
+              "mutations": [{**asdict(r), "seconds": round(r.seconds, 1)} for r in results]}
+    tmp = Path(args.json).with_suffix(".json.partial")
+    tmp.write_text(json.dumps(report, indent=2) + "\n")
+    tmp.replace(args.json)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", nargs="+", metavar="NAME", help="run only these mutations")
@@ -364,6 +377,8 @@ def main(argv=None) -> int:
         results.append(r)
         print(f"[{k:2d}/{len(chosen)}] {r.outcome:8s} {r.seconds:5.0f} s  {m.name:32s} "
               f"{r.first_failure}", flush=True)
+        # after every mutant, so a run stopped part-way keeps what it measured
+        write_report(args, base, results, time.monotonic() - t0, finished=k == len(chosen))
     total = time.monotonic() - t0
     s = score(results)
     print()
@@ -375,11 +390,6 @@ def main(argv=None) -> int:
           f"min ({total / max(len(results), 1):.0f} s a mutant); unmutated run {base.seconds:.0f} s")
     if s["survived"]:
         print("survived: " + ", ".join(s["survived"]))
-    report = {"code": measured_code(), "tests": list(args.tests),
-              "python": sys.version.split()[0],
-              "unmutated_seconds": round(base.seconds, 1), "total_seconds": round(total, 1),
-              **s, "mutations": [{**asdict(r), "seconds": round(r.seconds, 1)} for r in results]}
-    Path(args.json).write_text(json.dumps(report, indent=2) + "\n")
     print(f"wrote {args.json}")
     return 0 if not s["errors"] else 1
 
