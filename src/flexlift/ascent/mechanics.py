@@ -100,6 +100,26 @@ def contact_matrices(A, active, stiff, damp):
 
 
 @jit
+def update_contact_matrices(A, active, last, stiff, damp):
+    """:func:`contact_matrices` for the pattern ``active`` from those of the pattern ``last``:
+    the springs of the strips whose contact changed added or taken away (a moving touchdown
+    changes a few strips at a time; rebuilding all of them was most of a staged lift's time)."""
+    nr = A.nr
+    for s in range(active.size):
+        if active[s] == last[s]:
+            continue
+        sign = 1.0 if active[s] else -1.0
+        for i in range(nr):
+            fi = A.strip_force[i, s] * sign
+            if fi == 0.0:
+                continue
+            for j in range(nr):
+                sj = A.strip_shape[s, j]
+                stiff[i, j] += fi * A.strip_k[s] * sj
+                damp[i, j] += fi * A.strip_c[s] * sj
+
+
+@jit
 def implicit_matrix(A, h, stiff, damp, out):
     """Inverse of I + h^2/4 K + h/2 C for a step of ``h`` [s], into ``out``."""
     nr = A.nr

@@ -7,6 +7,12 @@ structural and added mass, hull drag, seabed contact, the released suction, the 
 the internal bags' buoyancy over their spans; and point loads: the external bags' buoyancy
 with their drag, and the point masses with their inertia. Shear and moment follow by statics
 (:func:`flexlift.loads.strength.shear_moment`).
+
+The seabed's contact and released suction are taken as the loop applies them: at its strips
+(:func:`flexlift.ascent.plant.strip_points`), each strip's line load over its cell (the cells
+tile the structure, a cell as long as the strip's quadrature weight; their edges are jumps of
+the grid). So the loads integrate to exactly the forces the simulation felt, also where a stiff
+contact spring changes from strip to strip (a held stretch beside a lifted one).
 """
 
 from __future__ import annotations
@@ -24,14 +30,22 @@ MAX_POINTS = 1001
 CHUNK = 64
 
 
+def strip_cells(plant) -> np.ndarray:
+    """Edges [m] (ns + 1,) of the strips' cells: each strip's quadrature weight laid end to
+    end from the aft end."""
+    return np.concatenate([[0.0], np.cumsum(plant.arrays.strip_weight)])
+
+
 def strength_grid(plant) -> tuple[np.ndarray, np.ndarray]:
-    """Grid x [m] along the structure (internal bags' span ends doubled: the jumps of their
-    loads) and the evaluation points just aft/forward of them [m]."""
+    """Grid x [m] along the structure (internal bags' span ends and the strips' cell edges
+    doubled: the jumps of their loads) and the evaluation points just aft/forward of them [m]."""
     hull = plant.hull
     L = hull.length
     n = min(8 * hull.n_elements, MAX_POINTS - 1)
     base = np.linspace(0.0, L, n + 1)
-    ends = sorted({e for s in plant.spans if s is not None for e in s if 0 < e < L})
+    cells = strip_cells(plant)[1:-1]
+    ends = sorted({float(e) for s in plant.spans if s is not None for e in s if 0 < e < L}
+                  | {float(e) for e in cells if 0 < e < L})
     x = np.sort(np.concatenate([base, ends, ends]))
     side = np.zeros_like(x)
     for e in ends:
@@ -48,9 +62,7 @@ class _Grid:
     weight: np.ndarray  # (nx,) submerged weight per length [N/m]
     mass: np.ndarray  # (nx,) structural plus added mass per length [kg/m]
     drag: np.ndarray  # (nx,) 1/2 rho C_D B [kg/m^2]
-    k: np.ndarray  # (nx,) contact stiffness per length
-    c: np.ndarray  # (nx,) contact damping per length
-    hold: np.ndarray  # (nx,) holding shape [1/m]
+    cell: np.ndarray  # (nx,) the strip whose cell holds each point
 
     @classmethod
     def of(cls, plant, xe: np.ndarray) -> _Grid:
@@ -58,12 +70,11 @@ class _Grid:
         el = hull.element_of(xe)
         m = hull.mass_per_length[el]
         xs = plant.strip_x
+        cell = np.clip(np.searchsorted(strip_cells(plant), xe, side="right") - 1, 0, xs.size - 1)
         return cls(plant.modes.shape_at(xe)[:, : a.nr],
                    hull.wet_weight_per_length(plant.gravity, plant.seawater_density,
                                               plant.steel_density)[el],
-                   m + plant.mass_line, np.interp(xe, xs, a.strip_drag),
-                   np.interp(xe, xs, a.strip_k), np.interp(xe, xs, a.strip_c),
-                   seabed.holding_shape(xe, hull.length, *plant.hold_stern_bow))
+                   m + plant.mass_line, np.interp(xe, xs, a.strip_drag), cell)
 
 
 def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) -> np.ndarray:
@@ -75,9 +86,7 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
     w, v, acc = snaps["q"] @ G.psi.T, snaps["v"] @ G.psi.T, snaps["a"] @ G.psi.T
     q = -G.weight - G.mass * acc
     q += hydro.drag(v - snaps["current"][:, None], G.drag)
-    held = ~snaps["sep"][:, :1]  # (nt, 1): one holding group
-    q += seabed.contact_load(w, v, G.k, G.c, held)
-    q -= np.where(held, 0.0, snaps["H"][:, :1] * G.hold)
+    q += seabed_loads(plant, snaps)[:, G.cell]
     if np.any(snaps["noise"]):
         q += np.array([np.interp(xe, plant.strip_x, row) for row in snaps["noise"]])
     for i, span in enumerate(plant.spans):
@@ -86,6 +95,16 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
             inside = (xe >= span[0]) & (xe <= span[1])
             q += np.outer(lift / (span[1] - span[0]), inside)
     return q
+
+
+def seabed_loads(plant, snaps: dict) -> np.ndarray:
+    """Line loads [N/m] (nt, ns) of the seabed at the loop's strips in every snapshot: the
+    contact (tension-capable where the strip's group is held) and the released suction."""
+    a = plant.arrays
+    w, v = snaps["q"] @ a.strip_shape.T, snaps["v"] @ a.strip_shape.T
+    held = ~snaps["sep"][:, a.strip_group]
+    q = seabed.contact_load(w, v, a.strip_k, a.strip_c, held)
+    return q - np.where(held, 0.0, snaps["H"][:, a.strip_group] * a.strip_hold)
 
 
 def point_loads(plant, snaps: dict) -> list[tuple[float, np.ndarray]]:

@@ -10,6 +10,7 @@ import numpy as np
 from flexlift import constants as C
 from flexlift.control.controller import MODE_CODES, ControlArrays, ControlState, new_state
 from flexlift.control.profile import valve_profile
+from flexlift.control.sequence import start_times
 from flexlift.errors import InputError
 from flexlift.fuzzy.tables import Table2D
 
@@ -145,7 +146,8 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
     pull = breakout_pull(scenario, float(a.H0.sum())) / rho_g  # [m^3]
     if mode in ("coordinated", "decentralized") and c.shape_breakout_pull and plant.kind == "coupled":
         xs = plant.strip_x
-        hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * xs))
+        share = (a.H0 / a.H0.sum())[a.strip_group] if a.H0.sum() > 0 else 1.0 / a.ng
+        hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * share * xs))
         V_pull = shaped_pull(pull, x, hold_centroid)
     else:
         V_pull = np.full(x.size, pull / max(x.size, 1))
@@ -166,5 +168,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
         k_height=c.height_integral_gain_m2_s, filter_time=c.measurement_filter_s,
         ref_T=prof.duration if prof else 0.0, ref_z=prof.z if prof else np.zeros(2),
         ref_v=prof.v if prof else np.zeros(2),
-        table=np.ascontiguousarray(values), fill_v=fill_map.table.values)
+        table=np.ascontiguousarray(values), fill_v=fill_map.table.values,
+        start=start_times(scenario, plant.names, plant.x_point, plant.external)[bags],
+        staged=c.sequence is not None)
     return arrays, new_state(bags.size)
