@@ -361,6 +361,7 @@ class Limits(_Section):
     pitch_deg: real(0.01, 90) = 15.0
     arrival_tolerance_m: real(0.001, 1_000) = 1.0
     surface_clearance_m: real(0, 1_000) = 0.0  # a bag top closer than this to the surface breaches
+    slope_validity_deg: real(0.1, 45) = 10.0  # a warning beyond: the small-deflection beam's validity
 
 
 # --------------------------------------------------------------------------- faults
@@ -422,7 +423,8 @@ class Simulation(_Section):
     duration_s: Duration = 6000.0  # stops earlier once the target has been held for hold_time_s
     hold_time_s: Time = 600.0
     time_step_s: real(1.0e-4, 10) = 0.1  # integration step (at most the control period)
-    retained_flexible_modes: whole(0, 1_000) = 3
+    # a number, or "auto": as many as the lift points need (ascent/plant.py retained_flexible)
+    retained_flexible_modes: whole(0, 1_000) | Literal["auto"] = 3
     output_interval_s: Duration = 1.0
     strength_interval_s: Duration = 10.0  # time spacing of stored shear/moment distributions
 

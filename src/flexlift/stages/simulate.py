@@ -91,6 +91,7 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
         primary = mode == scenario.control.mode
     figures = _write(result, Path(out), mode, primary) if out is not None else []
     summary = result.summary()
+    warnings += result.warnings
     rows = [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")] for e in result.events]
     tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"], rows),
               gas_table(summary, mode)]
