@@ -307,7 +307,8 @@ AUTO_FLEXIBLE_MODES = (3, 60)
 def retained_flexible(scenario, hull: Hull, plan: LiftPlan) -> int:
     """Flexible modes the coupled plant integrates: ``simulation.retained_flexible_modes``, or
     for ``auto`` as many as the lift points need: one half-wave per interval between
-    neighbouring external lift points, ceil(L / s_min), within :data:`AUTO_FLEXIBLE_MODES`.
+    neighbouring external lift points, ceil(L / s) with s their median spacing, within
+    :data:`AUTO_FLEXIBLE_MODES`.
     The lifts change from one lift point to the next (in a staged lift, one stage is up while
     the next still lies on the seabed), so the deflected shape has features as short as the
     spacing s; modes with shorter half-waves, far above that band of frequencies, respond
@@ -317,7 +318,7 @@ def retained_flexible(scenario, hull: Hull, plan: LiftPlan) -> int:
     if n != "auto":
         return int(n)
     x = np.unique([b.x for b in plan.bags if b.kind == "external"])
-    spacing = float(np.diff(x).min()) if x.size > 1 else hull.length
+    spacing = float(np.median(np.diff(x))) if x.size > 1 else hull.length
     lo, hi = AUTO_FLEXIBLE_MODES
     return int(np.clip(math.ceil(hull.length / max(spacing, 1e-9) - 1e-9), lo, hi))
 
