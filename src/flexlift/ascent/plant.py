@@ -307,7 +307,7 @@ AUTO_FLEXIBLE_MODES = (3, 60)
 def retained_flexible(scenario, hull: Hull, plan: LiftPlan) -> int:
     """Flexible modes the coupled plant integrates: ``simulation.retained_flexible_modes``, or
     for ``auto`` as many as the lift points need: one half-wave per interval between
-    neighbouring external lift points, ceil(L / s) with s their median spacing, within
+    neighbouring external lift points, ceil(L / s) with s their mean spacing, within
     :data:`AUTO_FLEXIBLE_MODES`.
     The lifts change from one lift point to the next (in a staged lift, one stage is up while
     the next still lies on the seabed), so the deflected shape has features as short as the
@@ -318,7 +318,7 @@ def retained_flexible(scenario, hull: Hull, plan: LiftPlan) -> int:
     if n != "auto":
         return int(n)
     x = np.unique([b.x for b in plan.bags if b.kind == "external"])
-    spacing = float(np.median(np.diff(x))) if x.size > 1 else hull.length
+    spacing = float(np.ptp(x) / (x.size - 1)) if x.size > 1 else hull.length
     lo, hi = AUTO_FLEXIBLE_MODES
     return int(np.clip(math.ceil(hull.length / max(spacing, 1e-9) - 1e-9), lo, hi))
 
