@@ -202,3 +202,21 @@ def test_a_steep_staged_lift_is_warned_with_where_and_when(line):
     (w,) = r.warnings
     assert "passed 10 deg from" in w and f"x = {r.headline['max_slope_x_m']:.0f} m" in w
     assert "small-deflection" in w
+
+
+#: the built-in line's headline numbers (README, "The built-in line's ascent")
+LINE_HEADLINE = {
+    "decentralized": {"separation_time_s": 648.3, "max_ascent_velocity_ms": 0.2256,
+                      "max_bending_moment_MNm": 0.365, "max_utilisation": 0.386,
+                      "max_slope_deg": 4.63, "arrival_spread_s": 271.0},
+    "coordinated": {"separation_time_s": 648.3, "max_ascent_velocity_ms": 0.3403,
+                    "max_bending_moment_MNm": 0.366, "max_utilisation": 0.387,
+                    "max_slope_deg": 4.60, "arrival_spread_s": 270.8},
+}
+
+
+@pytest.mark.parametrize("mode", ["decentralized", "coordinated"])
+def test_the_builtin_lines_headline_numbers_are_pinned(line_runs, mode):
+    h = line_runs[mode].headline
+    for key, value in LINE_HEADLINE[mode].items():
+        assert h[key] == pytest.approx(value, rel=0.02), key

@@ -16,7 +16,8 @@ from flexlift.scenario import ControlMode
 MODES = typing.get_args(ControlMode)
 
 
-def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
+def _write(result, out: Path, mode: str, primary: bool, seabed_validity: float | None = None
+           ) -> list[Figure]:
     from flexlift.output.plots import ascent
     from flexlift.output.plots._style import draw
     from flexlift.output.results import save_netcdf, to_csv
@@ -38,6 +39,13 @@ def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
         figs.append(Figure(draw(fd / f"simulate_{mode}_moment.png", ascent.moment_map, result),
                            f"Bending-moment envelope over the whole run and the bending "
                            f"moment along the hull in time, {window} ({mode} control)."))
+    if seabed_validity is not None and "x" in result.dataset.coords:
+        figs.append(Figure(draw(fd / f"simulate_{mode}_seabed.png", ascent.seabed_and_stress,
+                                result, seabed_validity),
+                           f"The part of the structure on the seabed in time (its edges are "
+                           f"the touchdown points), the largest slope along it against the "
+                           f"small-deflection beam's validity, {window}, and the envelope of "
+                           f"the bending-stress utilisation ({mode} control)."))
     return figs
 
 
@@ -89,7 +97,10 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
             raise
     if primary is None:
         primary = mode == scenario.control.mode
-    figures = _write(result, Path(out), mode, primary) if out is not None else []
+    long_ = scenario.pipe is not None or scenario.control.sequence is not None
+    figures = (_write(result, Path(out), mode, primary,
+                      scenario.limits.slope_validity_deg if long_ else None)
+               if out is not None else [])
     summary = result.summary()
     warnings += result.warnings
     rows = [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")] for e in result.events]
