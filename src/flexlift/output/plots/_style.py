@@ -207,6 +207,7 @@ class _Background:
             self._reap_oldest()
         sys.stdout.flush()
         sys.stderr.flush()  # the child must not write the parent's pending output again
+        outer = gc.get_freeze_count() > 0  # a caller froze the heap (and releases it)
         gc.freeze()  # the child's collector then leaves the parent's objects (and pages) alone
         pid = -1
         try:
@@ -214,7 +215,7 @@ class _Background:
                 warnings.simplefilter("ignore", DeprecationWarning)
                 pid = os.fork()
         finally:
-            if pid != 0:
+            if pid != 0 and not outer:
                 gc.unfreeze()
         if pid == 0:  # the child: draw, write, leave without running the parent's cleanup
             code = 1
