@@ -407,3 +407,30 @@ def test_figure_processes_from_the_environment(monkeypatch, text, n):
         monkeypatch.setattr(os, "sched_getaffinity", lambda pid, c=cores: c)
         monkeypatch.setattr(os, "getloadavg", lambda ld=load: (ld, ld, ld))
         assert figure_processes() == (expected if default else n)
+
+
+def test_png_files_are_the_pixels_savefig_draws(tmp_path):
+    """The saver writes what matplotlib's savefig draws, pixel for pixel: RGB for an opaque
+    figure, RGBA for one with transparent parts, at the house dpi."""
+    import io
+
+    from PIL import Image
+
+    from flexlift.output.plots._style import STYLE, new_figure, save
+
+    for alpha in (1.0, 0.0):
+        fig, ax = new_figure()
+        ax.semilogy(np.linspace(1, 10, 50), np.exp(np.linspace(0, 8, 50)), label="exp")
+        ax.set_title("Title", fontweight="bold")
+        ax.legend()
+        fig.patch.set_alpha(alpha)
+        prepare(fig)
+        ref = io.BytesIO()
+        with plt.rc_context(STYLE):
+            fig.savefig(ref, format="png")
+        expected = np.asarray(Image.open(ref).convert("RGBA"))
+        path = save(fig, tmp_path / f"a{alpha:g}.png")
+        got = Image.open(path)
+        assert got.mode == ("RGB" if alpha == 1.0 else "RGBA")
+        assert got.info["dpi"] == pytest.approx((STYLE["savefig.dpi"],) * 2, abs=0.01)
+        np.testing.assert_array_equal(np.asarray(got.convert("RGBA")), expected)
