@@ -407,3 +407,77 @@ def test_figure_processes_from_the_environment(monkeypatch, text, n):
         monkeypatch.setattr(os, "sched_getaffinity", lambda pid, c=cores: c)
         monkeypatch.setattr(os, "getloadavg", lambda ld=load: (ld, ld, ld))
         assert figure_processes() == (expected if default else n)
+
+
+def test_png_files_are_the_pixels_savefig_draws(tmp_path):
+    """The saver writes what matplotlib's savefig draws, pixel for pixel: RGB for an opaque
+    figure, RGBA for one with transparent parts, at the house dpi."""
+    import io
+
+    from PIL import Image
+
+    from flexlift.output.plots._style import STYLE, new_figure, save
+
+    for alpha in (1.0, 0.0):
+        fig, ax = new_figure()
+        ax.semilogy(np.linspace(1, 10, 50), np.exp(np.linspace(0, 8, 50)), label="exp")
+        ax.set_title("Title", fontweight="bold")
+        ax.legend()
+        fig.patch.set_alpha(alpha)
+        prepare(fig)
+        ref = io.BytesIO()
+        with plt.rc_context(STYLE):
+            fig.savefig(ref, format="png")
+        expected = np.asarray(Image.open(ref).convert("RGBA"))
+        path = save(fig, tmp_path / f"a{alpha:g}.png")
+        got = Image.open(path)
+        assert got.mode == ("RGB" if alpha == 1.0 else "RGBA")
+        assert got.info["dpi"] == pytest.approx((STYLE["savefig.dpi"],) * 2, abs=0.01)
+        np.testing.assert_array_equal(np.asarray(got.convert("RGBA")), expected)
+
+
+def test_ticks_are_made_only_in_the_view_with_the_same_labels():
+    """The saver's locators leave out the ticks beyond the ends of each axis (never drawn,
+    each costs three lines and two texts) and the labels in the view stay as matplotlib
+    writes them, on linear, log and shared axes."""
+    from flexlift.output.plots._style import InView, apply_margins, lean_log_axes, new_figure
+
+    def figure():
+        fig, (a1, a2, a3) = new_figure(3, 1, sharex=True, figsize=(8.0, 8.0))
+        t = np.linspace(3.3, 97.2, 400)
+        a1.plot(t, 1e3 + np.sin(t / 9) * 0.37)  # an offset on the y axis
+        a2.semilogy(t, np.exp(t / 20))
+        a3.plot(t, np.cos(t / 7))
+        return fig
+
+    def drawn_ticks(fig):
+        out = []
+        for ax in fig.axes:
+            for axis in (ax.xaxis, ax.yaxis):
+                lo, hi = sorted(axis.get_view_interval())
+                tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+                out.append([(round(t.get_loc(), 9), t.label1.get_text())
+                            for t in axis.get_major_ticks() + axis.get_minor_ticks()
+                            if lo - tol <= t.get_loc() <= hi + tol])
+                out.append(axis.offsetText.get_text())
+        return out
+
+    plain = figure()  # all that prepare does but the locators
+    apply_margins(plain)
+    for ax in plain.axes:
+        lean_log_axes(ax)
+    plain.canvas.draw()
+    lean = figure()
+    _drawn(lean)
+    assert drawn_ticks(lean) == drawn_ticks(plain)
+    made = [len(axis.get_majorticklocs()) for ax in plain.axes for axis in (ax.xaxis, ax.yaxis)]
+    assert sum(len(axis.get_majorticklocs()) for ax in lean.axes
+               for axis in (ax.xaxis, ax.yaxis)) < sum(made)
+    for ax in lean.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            assert isinstance(axis.get_major_locator(), InView)
+            lo, hi = sorted(axis.get_view_interval())
+            locs = axis.get_majorticklocs()
+            assert ((locs >= lo - 1e-9 * abs(hi)) & (locs <= hi + 1e-9 * abs(hi))).all()
+    plt.close(plain)
+    plt.close(lean)

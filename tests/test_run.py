@@ -177,3 +177,35 @@ def test_one_mode_numbering_and_one_time_unit(tanker_run):
     assert "flexible mode 5" in text and "flexible mode 6" not in text and "N/2" in text
     assert "[min]" not in text and "minute" not in text
     assert re.search(r"60 s before the first separation", text)
+
+
+def test_the_heap_is_frozen_during_a_run_and_released_after(monkeypatch, tmp_path):
+    """The collector skips the objects from before the run (its full collections walked the
+    imports' few hundred thousand objects), inside the stages, and has them back after; an
+    outer freeze is left to its owner."""
+    import gc
+
+    import flexlift.stages.run as run_mod
+
+    seen = []
+
+    def stages(*a):
+        seen.append(gc.get_freeze_count())
+        return []
+
+    monkeypatch.setattr(run_mod, "_run_stages", stages)
+    assert gc.get_freeze_count() == 0
+    run_mod.run_all(None, tmp_path)
+    assert seen[0] > 1000 and gc.get_freeze_count() == 0
+    with pytest.raises(RuntimeError):
+        with run_mod.heap_frozen():
+            raise RuntimeError
+    assert gc.get_freeze_count() == 0
+    gc.freeze()
+    try:
+        frozen = gc.get_freeze_count()
+        with run_mod.heap_frozen():
+            pass
+        assert gc.get_freeze_count() == frozen  # not released by the inner block
+    finally:
+        gc.unfreeze()

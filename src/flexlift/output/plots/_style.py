@@ -30,8 +30,10 @@ matplotlib.use("Agg")  # files only; nothing in flexlift opens a window
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.ticker import (  # noqa: E402
     FuncFormatter,
+    Locator,
     LogFormatterSciNotation,
     LogLocator,
     NullLocator,
@@ -114,21 +116,90 @@ def lean_log_axes(ax, max_decades: float = 4.0) -> None:
             axis.set_major_locator(LogLocator(numticks=7))
 
 
+class InView(Locator):
+    """The ticks of the locator ``base`` that lie in the view: matplotlib makes a tick (three
+    lines and two texts, about a millisecond) for every value a locator returns, and most
+    locators return one more beyond each end of the axis, never drawn (a fifth of all the
+    ticks of the report). The labels stay the same: the formatters take their step and
+    offset from the ticks in the view."""
+
+    def __init__(self, base: Locator):
+        self.base = base
+
+    def set_axis(self, axis) -> None:
+        super().set_axis(axis)
+        self.base.set_axis(axis)
+
+    def __call__(self):
+        locs = np.asarray(self.base())
+        if self.axis is None or locs.size == 0:
+            return locs
+        lo, hi = sorted(self.axis.get_view_interval())
+        tol = 1e-9 * max(abs(lo), abs(hi), 1.0)
+        return locs[(locs >= lo - tol) & (locs <= hi + tol)]
+
+    def tick_values(self, vmin, vmax):
+        return self.base.tick_values(vmin, vmax)
+
+    def view_limits(self, vmin, vmax):
+        return self.base.view_limits(vmin, vmax)
+
+    def nonsingular(self, v0, v1):
+        return self.base.nonsingular(v0, v1)
+
+
+def ticks_in_view(ax) -> None:
+    """Every major and minor locator of ``ax`` (and of its secondary axes) wrapped in
+    :class:`InView` (shared axes share their locators: wrapped once)."""
+    for a in (ax, *ax.child_axes):
+        for axis in (a.xaxis, a.yaxis):
+            for ticker, flag in ((axis.major, "isDefault_majloc"),
+                                 (axis.minor, "isDefault_minloc")):
+                loc = ticker.locator
+                if isinstance(loc, (InView, NullLocator)):
+                    continue
+                default = getattr(axis, flag)
+                wrapped = InView(loc)
+                wrapped.set_axis(axis)
+                ticker.locator = wrapped
+                setattr(axis, flag, default)
+
+
 def prepare(fig) -> None:
-    """What a save does before drawing: the margins (:func:`apply_margins`) and the log axes
-    (:func:`lean_log_axes`)."""
+    """What a save does before drawing: the margins (:func:`apply_margins`), the log axes
+    (:func:`lean_log_axes`) and the ticks in the view only (:func:`ticks_in_view`)."""
     apply_margins(fig)
     for ax in fig.axes:
         lean_log_axes(ax)
+        ticks_in_view(ax)
+
+
+#: zlib level of the PNG files: 2 writes them in half the time of matplotlib's 6 (a tenth of
+#: the figures' time); stored as RGB (every figure is opaque), they are still 4 % smaller
+PNG_COMPRESS_LEVEL = 2
 
 
 def _write(fig, path: Path) -> None:
-    """Lay out and draw ``fig`` into ``path`` atomically (one draw)."""
+    """Lay out and draw ``fig`` into ``path`` atomically (one draw), as RGB when it is opaque
+    (else RGBA) at :data:`PNG_COMPRESS_LEVEL`, at the house ``savefig.dpi``."""
+    from PIL import Image, PngImagePlugin
+
     from flexlift.output.files import atomic_file
 
     prepare(fig)
-    with atomic_file(path, suffix=".png") as tmp, plt.rc_context(STYLE):
-        fig.savefig(tmp, format="png")
+    with plt.rc_context(STYLE):
+        fig.set_dpi(STYLE["savefig.dpi"])
+        canvas = fig.canvas  # Agg (see the top): what savefig draws on, its facecolor, no crop
+        if not isinstance(canvas, FigureCanvasAgg):
+            canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+    rgba = np.asarray(canvas.buffer_rgba())
+    image = Image.fromarray(rgba[..., :3] if (rgba[..., 3] == 255).all() else rgba)
+    info = PngImagePlugin.PngInfo()
+    info.add_text("Software", f"flexlift, matplotlib {matplotlib.__version__}")
+    with atomic_file(path, suffix=".png") as tmp:
+        image.save(tmp, format="png", compress_level=PNG_COMPRESS_LEVEL, pnginfo=info,
+                   dpi=(STYLE["savefig.dpi"],) * 2)
 
 
 def save(fig, path: str | os.PathLike) -> Path:
@@ -207,6 +278,7 @@ class _Background:
             self._reap_oldest()
         sys.stdout.flush()
         sys.stderr.flush()  # the child must not write the parent's pending output again
+        outer = gc.get_freeze_count() > 0  # a caller froze the heap (and releases it)
         gc.freeze()  # the child's collector then leaves the parent's objects (and pages) alone
         pid = -1
         try:
@@ -214,7 +286,7 @@ class _Background:
                 warnings.simplefilter("ignore", DeprecationWarning)
                 pid = os.fork()
         finally:
-            if pid != 0:
+            if pid != 0 and not outer:
                 gc.unfreeze()
         if pid == 0:  # the child: draw, write, leave without running the parent's cleanup
             code = 1
