@@ -142,6 +142,8 @@ def bag_pulls(scenario, plant, mode: str = "decentralized") -> np.ndarray:
     a = plant.arrays
     x = plant.x_point[np.flatnonzero(plant.external)]
     pull = breakout_pull(scenario, float(a.H0.sum())) / a.rho_g  # [m^3]
+    if not x.size:
+        return np.zeros(0)
     if (mode in ("coordinated", "decentralized") and scenario.control.shape_breakout_pull
             and plant.kind == "coupled"):
         share = (a.H0 / a.H0.sum())[a.strip_group] if a.H0.sum() > 0 else 1.0 / a.ng
