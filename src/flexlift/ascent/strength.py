@@ -18,6 +18,7 @@ where a stiff contact spring changes from strip to strip (a held stretch beside 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,15 +26,20 @@ import numpy as np
 from flexlift.loads.strength import shear_moment
 from flexlift.physics import gas, hydro, seabed
 
-#: most grid points along the structure (fine meshes are sampled more coarsely)
-MAX_POINTS = 4001
+#: most points of the stored shear and moment along the structure (fine meshes are sampled
+#: more coarsely)
+MAX_POINTS = 1001
+#: the statics are integrated on up to this many times as many points (kept: every so many)
+MAX_REFINE = 4
 #: grid points per half-wave of the highest retained flexible mode: the loads of the
 #: retained modes (inertia, drag) are smooth on this scale, and sampled less finely the
 #: statics no longer close (the staged pipeline's 40 modes on 1,000 points: a closing moment
-#: of 10 % of the largest; on 4,000: 0.6 %)
+#: of 10 % of the largest; on 4,000: 0.6 %). The finer grid is only integrated on; the
+#: stored values are those at the coarser grid's points.
 POINTS_PER_HALF_WAVE = 100
-#: snapshots evaluated at once (bounds the temporary arrays of long runs on fine grids)
-CHUNK = 64
+#: values (snapshots x grid points) evaluated at once: bounds the temporary arrays of long runs
+#: on fine grids to about 0.25 MB each
+CHUNK_VALUES = 32_768
 
 
 def strip_cells(plant) -> np.ndarray:
@@ -42,23 +48,31 @@ def strip_cells(plant) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(plant.arrays.strip_weight)])
 
 
-def strength_grid(plant) -> tuple[np.ndarray, np.ndarray]:
-    """Grid x [m] along the structure (internal bags' span ends and the strips' cell edges
-    doubled: the jumps of their loads) and the evaluation points just aft/forward of them [m]."""
+def strength_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Grid x [m] along the structure to integrate the statics on (internal bags' span ends
+    and the strips' cell edges doubled: the jumps of their loads), the evaluation points just
+    aft/forward of them [m], and the indices of the points whose values are stored: an even
+    grid of up to :data:`MAX_POINTS` (8 per element) and the span ends; the integration grid
+    refines it up to :data:`MAX_REFINE` times for :data:`POINTS_PER_HALF_WAVE`."""
     hull = plant.hull
     L = hull.length
+    n_out = min(8 * hull.n_elements, MAX_POINTS - 1)
     n_half_waves = plant.arrays.nr - 1  # the highest flexible mode's (n + 1 nodes)
-    n = min(max(8 * hull.n_elements, POINTS_PER_HALF_WAVE * n_half_waves), MAX_POINTS - 1)
-    base = np.linspace(0.0, L, n + 1)
-    cells = strip_cells(plant)[1:-1]
-    ends = sorted({float(e) for s in plant.spans if s is not None for e in s if 0 < e < L}
-                  | {float(e) for e in cells if 0 < e < L})
+    refine = int(np.clip(math.ceil(POINTS_PER_HALF_WAVE * n_half_waves / n_out), 1, MAX_REFINE))
+    base = np.linspace(0.0, L, n_out * refine + 1)
+    spans = {float(e) for s in plant.spans if s is not None for e in s if 0 < e < L}
+    cells = {float(e) for e in strip_cells(plant)[1:-1] if 0 < e < L}
+    ends = sorted(spans | cells)
     x = np.sort(np.concatenate([base, ends, ends]))
     side = np.zeros_like(x)
+    stored = np.zeros(x.size, dtype=bool)
     for e in ends:
         k = np.flatnonzero(np.isclose(x, e))
         side[k[0]], side[k[-1]] = -1.0, 1.0
-    return x, np.clip(x + side * 1e-9 * L, 0.0, L)
+        stored[k] = e in spans
+    on_base = np.searchsorted(x, base[::refine])  # the first of any equal values
+    stored[on_base] = True
+    return x, np.clip(x + side * 1e-9 * L, 0.0, L), np.flatnonzero(stored)
 
 
 @dataclass(frozen=True)
@@ -140,15 +154,16 @@ def point_loads(plant, snaps: dict) -> list[tuple[float, np.ndarray]]:
 def strength(plant, snaps: dict):
     """(x [m], V [N] (nt, nx), M [N m] (nt, nx)) along the structure at the snapshots
     (``snaps``: the snapshot arrays stacked over time, names as in the loop's record)."""
-    x, xe = strength_grid(plant)
+    x, xe, keep = strength_grid(plant)
     nt = snaps["t"].size
-    V, M = np.empty((nt, x.size)), np.empty((nt, x.size))
+    V, M = np.empty((nt, keep.size)), np.empty((nt, keep.size))
     grid = _Grid.of(plant, xe)
-    for a in range(0, nt, CHUNK):
-        part = {k: v[a:a + CHUNK] for k, v in snaps.items()}
-        V[a:a + CHUNK], M[a:a + CHUNK] = shear_moment(x, line_loads(plant, xe, part, grid),
-                                                      point_loads(plant, part))
-    return x, V, M
+    chunk = max(1, CHUNK_VALUES // x.size)
+    for a in range(0, nt, chunk):
+        part = {k: v[a:a + chunk] for k, v in snaps.items()}
+        Vc, Mc = shear_moment(x, line_loads(plant, xe, part, grid), point_loads(plant, part))
+        V[a:a + chunk], M[a:a + chunk] = Vc[:, keep], Mc[:, keep]
+    return x[keep], V, M
 
 
 def seabed_profile(plant, snaps: dict) -> dict:
@@ -168,7 +183,8 @@ def seabed_profile(plant, snaps: dict) -> dict:
     any_ = grounded.any(axis=1)
     first = np.where(any_, xs[np.argmax(grounded, axis=1)], np.nan)
     last = np.where(any_, xs[xs.size - 1 - np.argmax(grounded[:, ::-1], axis=1)], np.nan)
-    x, _ = strength_grid(plant)
+    x, _, keep = strength_grid(plant)
+    x = x[keep]
     slope = snaps["q"] @ slope_at(plant.modes, x)[:, : a.nr].T
     return {"grounded_from": first, "grounded_to": last,
             "grounded_length": grounded @ a.strip_weight, "x": x, "slope": slope}
