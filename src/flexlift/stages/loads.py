@@ -27,6 +27,22 @@ def _extreme(e, scale: float) -> dict:
     return {"value": e.value / scale, "x_m": e.x, "node": e.node}
 
 
+def still_water(scenario, hull, plan, per_element: int = 50):
+    """(load case, strength) of the plan in still water: bags at full lift against the weight
+    times the breakout factor; a pipeline's case closed first
+    (:func:`~flexlift.loads.strength.balanced_case`: over its length any imbalance would dwarf
+    its moments; the ship's stays the paper's, with its published closing values)."""
+    case = lift_load_case(plan, hull)
+    if scenario.pipe is not None:
+        case = balanced_case(case, {b.name for b in plan.bags})
+    return case, strength(case, hull, per_element)
+
+
+def utilisation_along(scenario, st: Strength) -> np.ndarray:
+    """sigma / sigma_allow = |M| / (Z sigma_allow) at ``st.x`` [-]."""
+    return np.abs(st.M) / section_modulus(scenario, st.x) / (scenario.hull.allowable_stress_MPa * 1e6)
+
+
 def stress_of(scenario, st: Strength) -> dict:
     """Hull girder bending stress sigma = |M| / Z under the plan and its utilisation."""
     Z = section_modulus(scenario, st.x)
@@ -151,10 +167,7 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
     """
     hull = hull_from_scenario(scenario)
     plan = plan_lift(scenario, hull)
-    case = lift_load_case(plan, hull)
-    if scenario.pipe is not None:  # a long line: its case closed (the ship's stays the paper's)
-        case = balanced_case(case, {b.name for b in plan.bags})
-    st = strength(case, hull, per_element)
+    case, st = still_water(scenario, hull, plan, per_element)
     summary = summary_of(plan, hull, st, _layout_text(scenario, plan))
     plant = coupled_plant(scenario, hull, plan)
     refuse_unworkable(scenario, plant)

@@ -144,10 +144,11 @@ def moment_map(result):
     return fig
 
 
-def seabed_and_stress(result, validity_deg: float):
+def seabed_and_stress(result, validity_deg: float, x=None, utilisation=None):
     """A long structure's lift: where it lies on the seabed in time (the touchdown points),
     its largest slope in time against the small-deflection beam's validity, and the
-    envelope of the bending-stress utilisation along it."""
+    bending-stress utilisation along it: the envelope over the lift and, given ``x`` [m] and
+    ``utilisation`` [-], the still-water case of the loads stage."""
     ds = result.dataset
     ts = ds.time_strength.values
     t0, t1 = zoom_window(result)
@@ -169,12 +170,15 @@ def seabed_and_stress(result, validity_deg: float):
     for ax in (a1, a2):
         ax.set_xlim(t0, t1)
         _event_lines(ax, result)
-    x = ds.x.values
-    a3.plot(x, ds.utilisation_max.values, label="envelope over the lift")
+    top = float(ds.utilisation_max.values.max())
+    a3.plot(ds.x.values, ds.utilisation_max.values, label="envelope over the lift")
+    if x is not None:
+        a3.plot(x, utilisation, color="C2", lw=1, label="still water, bags at full lift")
+        top = max(top, float(np.max(utilisation)))
     a3.axhline(1.0, color="C3", ls="--", lw=1, label="allowable")
     a3.set(xlabel="x along the structure [m]", ylabel="utilisation σ / σ_allow [-]",
-           title="Bending-stress utilisation, whole run")
-    a3.set_ylim(0.0, max(1.1, 1.05 * float(ds.utilisation_max.values.max())))
+           title="Bending-stress utilisation")
+    a3.set_ylim(0.0, max(1.1, 1.05 * top))
     a3.legend(loc="upper right")
     return fig
 
