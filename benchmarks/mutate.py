@@ -37,7 +37,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 #: the tests each mutant runs, fastest to fail first (pytest -x stops at the first failure)
 TESTS = ("tests/test_physics.py", "tests/test_controller.py", "tests/test_control_laws.py",
-         "tests/test_plant_laws.py", "tests/test_results.py", "tests/test_simulate.py")
+         "tests/test_plant_laws.py", "tests/test_results.py", "tests/test_simulate.py",
+         "tests/test_staged_lift.py")
 
 
 @dataclass(frozen=True)
@@ -106,8 +107,8 @@ MUTATIONS = (
       "damping=scenario.hull.modal_damping * modes.omega[:nr]",
       "modal damping zeta omega instead of 2 zeta omega"),
     M("dry-weight-plant", "ascent/plant.py",
-      "strip_gen @ hull.wet_weight_per_length(g, rho, rho_s)[el]",
-      "strip_gen @ (hull.mass_per_length[el] * g)",
+      "wet_line = hull.wet_weight_per_length(g, rho, rho_s)[el]",
+      "wet_line = hull.mass_per_length[el] * g",
       "the simulated hull carries its dry weight (steel buoyancy lost)"),
     M("open-bag-relief", "ascent/plant.py",
       "relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)",
@@ -212,6 +213,20 @@ MUTATIONS = (
       "S.r_in[i] = min(max((vel - S.zd_f[i]) / C.r_scale, -1.0), 1.0)",
       "S.r_in[i] = min(max((S.zd_f[i] - vel) / C.r_scale, -1.0), 1.0)",
       "the supervisor's rate input with the wrong sign"),
+    # ------------------------------------------------------------------ the staged lift
+    M("stage-start-ignored", "control/controller.py",
+      "S.started[i] = t >= C.start[i] - 1e-9", "S.started[i] = True",
+      "every bag of a staged lift pulls from the start"),
+    M("stretch-hold-normalisation", "ascent/plant.py",
+      "hold_s = shape / frac[strip_group]", "hold_s = shape",
+      "a stage's suction not normalised to its own stretch"),
+    M("contact-update-sign", "ascent/mechanics.py",
+      "sign = 1.0 if active[s] else -1.0", "sign = 1.0",
+      "a strip leaving the seabed adds its spring instead of taking it away"),
+    M("seabed-load-centroid", "ascent/strength.py",
+      "spread = 1.0 + 12.0 * (xs[cell] - mid) * (xe - mid) / wid**2",
+      "spread = 1.0 + 0.0 * (xs[cell] - mid) * (xe - mid) / wid**2",
+      "the strength spreads each strip's seabed load evenly over its cell (centroid off the strip)"),
 )
 
 

@@ -37,6 +37,7 @@ from flexlift.ascent.mechanics import (
     implicit_matrix,
     strip_loads,
     trapezoidal_step,
+    update_contact_matrices,
 )
 from flexlift.ascent.recording import group_uplift, log_event, store_row, store_snapshot  # noqa: F401
 from flexlift.ascent.state import (
@@ -342,15 +343,20 @@ def _loads_at_state(A, R, W, noise):
 @jit
 def _implicit_step(A, R, h, b_mid):
     """One trapezoidal step of ``h`` [s]; the implicit matrix rebuilt when the contact
-    pattern or the step length changed."""
-    same = bool(R.counters[1] & F_MATRIX) and R.scalars[3] == h
-    if same:
+    pattern or the step length changed (the contact springs of the strips that changed
+    added or taken away)."""
+    valid = bool(R.counters[1] & F_MATRIX)
+    changed = not valid
+    if valid:
         for s in range(A.ns):
             if R.active[s] != R.last_active[s]:
-                same = False
+                changed = True
                 break
-    if not same:
-        contact_matrices(A, R.active, R.stiff, R.damp)
+    if changed or R.scalars[3] != h:
+        if not valid:
+            contact_matrices(A, R.active, R.stiff, R.damp)
+        elif changed:
+            update_contact_matrices(A, R.active, R.last_active, R.stiff, R.damp)
         implicit_matrix(A, h, R.stiff, R.damp, R.implicit)
         R.last_active[:] = R.active
         R.scalars[3] = h

@@ -85,18 +85,34 @@ def contact_matrices(A, active, stiff, damp):
     """Modal stiffness and damping [per modal coordinate] of the strips in contact."""
     stiff[:] = 0.0
     damp[:] = 0.0
-    nr = A.nr
     for s in range(active.size):
-        if not active[s]:
+        if active[s]:
+            _add_springs(A, s, 1.0, stiff, damp)
+
+
+@jit
+def update_contact_matrices(A, active, last, stiff, damp):
+    """:func:`contact_matrices` for the pattern ``active`` from those of the pattern ``last``:
+    the springs of the strips whose contact changed added or taken away (a moving touchdown
+    changes a few strips at a time; rebuilding all of them was most of a staged lift's time)."""
+    for s in range(active.size):
+        if active[s] != last[s]:
+            sign = 1.0 if active[s] else -1.0
+            _add_springs(A, s, sign, stiff, damp)
+
+
+@jit
+def _add_springs(A, s, sign, stiff, damp):
+    """Add ``sign`` times strip ``s``'s contact spring and damper to the modal matrices."""
+    nr = A.nr
+    for i in range(nr):
+        fi = A.strip_force[i, s] * sign
+        if fi == 0.0:
             continue
-        for i in range(nr):
-            fi = A.strip_force[i, s]
-            if fi == 0.0:
-                continue
-            for j in range(nr):
-                sj = A.strip_shape[s, j]
-                stiff[i, j] += fi * A.strip_k[s] * sj
-                damp[i, j] += fi * A.strip_c[s] * sj
+        for j in range(nr):
+            sj = A.strip_shape[s, j]
+            stiff[i, j] += fi * A.strip_k[s] * sj
+            damp[i, j] += fi * A.strip_c[s] * sj
 
 
 @jit

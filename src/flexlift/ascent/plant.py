@@ -23,12 +23,14 @@ structure for the results. Units: SI throughout (N, m, s, mol, Pa).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from flexlift import constants as C
+from flexlift.control.sequence import stage_groups
 from flexlift.errors import InputError
 from flexlift.loads.liftplan import LiftPlan, plan_lift
 from flexlift.physics import gas, hydro, seabed
@@ -215,8 +217,9 @@ def wet_beam(scenario, hull: Hull):
 
 
 def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = None) -> Plant:
-    """The coupled plant of ``scenario``: the wet hull, its bags and one holding group."""
-    env, hy, sim = scenario.environment, scenario.hydro, scenario.simulation
+    """The coupled plant of ``scenario``: the wet hull, its bags and its holding groups (one,
+    or one per stage of a staged lift: :func:`holding_groups`)."""
+    env, hy = scenario.environment, scenario.hydro
     hull = hull or hull_from_scenario(scenario)
     if plan is None:
         plan = plan_lift(scenario, hull)
@@ -224,9 +227,10 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     beam, mass_line = wet_beam(scenario, hull)
     # the retained modes plus 10 more for the static correction of the eliminated ones (their
     # share falls as 1 / omega^2); all of them on the tanker's 11 elements
-    n_modes = min(beam.n_dof, max(MODES_FOR_CORRECTION, 2 + sim.retained_flexible_modes + 10))
+    n_flex = retained_flexible(scenario, hull, plan)
+    n_modes = min(beam.n_dof, max(MODES_FOR_CORRECTION, 2 + n_flex + 10))
     modes = compute_modes(beam, n_modes=n_modes)
-    nr = min(2 + sim.retained_flexible_modes, modes.n_modes)
+    nr = min(2 + n_flex, modes.n_modes)
     xs, ws = strip_points(hull)
     psi_s = modes.shape_at(xs)  # (ns, m)
     bags = plan.bags
@@ -239,12 +243,24 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     rho_s = env.steel_density_kg_m3
     el = hull.element_of(xs)
     strip_gen = (psi_s * ws[:, None]).T  # (m, ns)
-    weight_gen = -(strip_gen @ hull.wet_weight_per_length(g, rho, rho_s)[el]
+    wet_line = hull.wet_weight_per_length(g, rho, rho_s)[el]  # at the strips [N/m]
+    weight_gen = -(strip_gen @ wet_line
                    + modes.displacement.T @ hull.point_wet_weights(g, rho, rho_s))
     sb = scenario.seabed
     stern, bow = (sb.stern_ratio, sb.bow_ratio) if sb.holding_shape == "linear" else (1.0, 1.0)
-    hold_s = seabed.holding_shape(xs, hull.length, stern, bow)
+    shape = seabed.holding_shape(xs, hull.length, stern, bow)
     H0 = (scenario.lift.breakout_factor - 1.0) * plan.wet_weight
+    strip_group, bag_group, ng = holding_groups(scenario, [b.name for b in bags], x_point,
+                                                external, xs)
+    W_g, frac = np.array([plan.wet_weight]), np.ones(1)
+    if ng > 1:  # each stretch's share of the weight (its point masses too) and of the suction
+        node_group = strip_group[np.clip(np.searchsorted(xs, hull.x_nodes), 0, xs.size - 1)]
+        W_g = (np.bincount(strip_group, ws * wet_line, ng)
+               + np.bincount(node_group, hull.point_wet_weights(g, rho, rho_s), ng))
+        W_g *= plan.wet_weight / W_g.sum()  # the plan's W' exactly, shared as the loads lie
+        frac = np.bincount(strip_group, ws * shape, ng)
+        frac /= frac.sum()
+    hold_s = shape / frac[strip_group]  # per unit H of the strip's own group
     ns = xs.size
     cs, cb, cw = static_correction(psi_p[:, nr:], modes.omega[nr:] ** 2, strip_gen[nr:],
                                    psi_b[:, nr:].T, weight_gen[nr:])
@@ -257,18 +273,19 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     heave_row[0] = float(psi_s[0, 0])
     relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)
     arrays = PlantArrays(
-        nr=nr, nb=nb, ns=ns, ng=1,
+        nr=nr, nb=nb, ns=ns, ng=ng,
         omega2=modes.omega[:nr] ** 2, damping=2.0 * scenario.hull.modal_damping * modes.omega[:nr],
         strip_shape=np.ascontiguousarray(psi_s[:, :nr]),
         strip_force=np.ascontiguousarray(strip_gen[:nr]), strip_weight=ws,
         strip_drag=np.full(ns, hydro.drag_coefficient(rho, hy.drag_coefficient, hull.breadth)),
         strip_k=np.full(ns, sb.contact_stiffness_N_m2), strip_c=np.full(ns, sb.contact_damping_Ns_m2),
-        strip_group=np.zeros(ns, dtype=np.int64), strip_hold=hold_s,
-        hold_force=-(strip_gen[:nr] @ hold_s)[:, None], H0=np.array([H0]),
-        group_weight=np.array([plan.wet_weight]),
+        strip_group=strip_group, strip_hold=hold_s,
+        hold_force=-np.stack([strip_gen[:nr] @ (hold_s * (strip_group == k)) for k in range(ng)],
+                             axis=1),
+        H0=H0 * frac, group_weight=W_g,
         breakout_time=sb.breakout_time_s, release_time=sb.release_time_s,
         bag_shape=np.ascontiguousarray(psi_p[:, :nr]), bag_slope=np.ascontiguousarray(dpsi_p[:, :nr]),
-        bag_force=np.ascontiguousarray(psi_b[:, :nr].T), bag_group=np.zeros(nb, dtype=np.int64),
+        bag_force=np.ascontiguousarray(psi_b[:, :nr].T), bag_group=bag_group,
         capacity=capacity, relief=relief, top_offset=top,
         bag_drag=np.where(external, hydro.drag_coefficient(
             rho, hy.bag_drag_coefficient, 1.0) * hydro.sphere_frontal_area(capacity), 0.0),
@@ -277,10 +294,33 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
         liftoff_clearance=LIFTOFF_CLEARANCE, **gas_constants(scenario))
     return Plant(kind="coupled", names=tuple(b.name for b in bags), external=external,
                  x_point=x_point, spans=tuple(b.span for b in bags),
-                 neutral_volume=neutral_volumes(external, capacity, plan.wet_weight, rho * g),
+                 neutral_volume=neutral_volumes(external, capacity, W_g, rho * g, bag_group),
                  strip_x=xs, strip_element=el, arrays=arrays, hull=hull, modes=modes, plan=plan,
                  mass_line=mass_line, wet_weight=plan.wet_weight, hold_stern_bow=(stern, bow),
                  gravity=g, seawater_density=rho, steel_density=rho_s)
+
+
+#: the range of ``simulation.retained_flexible_modes: auto``
+AUTO_FLEXIBLE_MODES = (3, 60)
+
+
+def retained_flexible(scenario, hull: Hull, plan: LiftPlan) -> int:
+    """Flexible modes the coupled plant integrates: ``simulation.retained_flexible_modes``, or
+    for ``auto`` as many as the lift points need: one half-wave per interval between
+    neighbouring external lift points, ceil(L / s) with s their mean spacing, within
+    :data:`AUTO_FLEXIBLE_MODES`.
+    The lifts change from one lift point to the next (in a staged lift, one stage is up while
+    the next still lies on the seabed), so the deflected shape has features as short as the
+    spacing s; modes with shorter half-waves, far above that band of frequencies, respond
+    quasi-statically and the static correction carries them (on the staged pipeline the peak
+    moment is 8.9, 2.1, 0.327 and 0.321 MN m with 10, 20, 40 and 60 flexible modes)."""
+    n = scenario.simulation.retained_flexible_modes
+    if n != "auto":
+        return int(n)
+    x = np.unique([b.x for b in plan.bags if b.kind == "external"])
+    spacing = float(np.ptp(x) / (x.size - 1)) if x.size > 1 else hull.length
+    lo, hi = AUTO_FLEXIBLE_MODES
+    return int(np.clip(math.ceil(hull.length / max(spacing, 1e-9) - 1e-9), lo, hi))
 
 
 #: modes computed for the static correction at least (2 rigid + 22 flexible)
@@ -289,15 +329,38 @@ MODES_FOR_CORRECTION = 24
 LIFTOFF_CLEARANCE = 0.05
 
 
-def neutral_volumes(external: np.ndarray, capacity: np.ndarray, wet_weight: float,
-                    rho_g: float) -> np.ndarray:
+def neutral_volumes(external: np.ndarray, capacity: np.ndarray, wet_weight, rho_g: float,
+                    bag_group: np.ndarray | None = None) -> np.ndarray:
     """Gas volumes at the start (SPEC §5) [m^3]: the internal (closed) bags full, the external
-    bags sharing the rest of the wet weight W' [N] equally so the hull rests neutral."""
+    bags sharing the rest of the wet weight W' [N] equally so the hull rests neutral; with
+    holding groups (``bag_group``, ``wet_weight`` per group), within each group."""
+    groups = np.zeros(external.size, dtype=np.int64) if bag_group is None else bag_group
+    W = np.atleast_1d(np.asarray(wet_weight, dtype=float))
     V = np.where(external, 0.0, capacity)
-    n_ext = int(external.sum())
-    if n_ext:
-        V = np.where(external, (wet_weight / rho_g - V.sum()) / n_ext, V)
+    for g in range(W.size):
+        ext = external & (groups == g)
+        if ext.any():
+            V = np.where(ext, (W[g] / rho_g - V[groups == g].sum()) / ext.sum(), V)
     return V
+
+
+def holding_groups(scenario, names, x_point, external, xs):
+    """(group of each strip (ns,), group of each bag (nb,), number of groups) of the seabed's
+    hold. One group unless the lift is staged (``control.sequence``): then each stage's
+    group of bags has its own stretch of the structure (the strips nearest to its bags) with
+    its share of the suction and of the weight, and lets go on its own (SPEC §9.1): a
+    pipeline peels off stage by stage. An internal bag belongs to the stretch its point is in."""
+    if scenario.control.sequence is None:
+        return np.zeros(xs.size, dtype=np.int64), np.zeros(len(names), dtype=np.int64), 1
+    groups = stage_groups(scenario, names, x_point, external)
+    of_bag = np.zeros(len(names), dtype=np.int64)
+    for k, members in enumerate(groups):
+        of_bag[members] = k
+    ext = np.flatnonzero(external)
+    strip_group = of_bag[ext][np.abs(xs[:, None] - x_point[ext][None, :]).argmin(1)]
+    for i in np.flatnonzero(~external):
+        of_bag[i] = strip_group[np.abs(xs - x_point[i]).argmin()]
+    return strip_group.astype(np.int64), of_bag, len(groups)
 
 
 def check_neutral(plant: Plant) -> None:

@@ -88,6 +88,12 @@ class Result:
         return json.loads(self.dataset.attrs.get("reasons", "{}"))
 
     @property
+    def warnings(self) -> list[str]:
+        """What the run's engineer should know though no criterion failed (e.g. slopes beyond
+        the small-deflection beam's validity), one sentence each, with where and when."""
+        return json.loads(self.dataset.attrs.get("warnings", "[]"))
+
+    @property
     def error(self) -> str:
         return self.dataset.attrs.get("error", "")
 
@@ -105,13 +111,14 @@ class Result:
         keys = ("breakout_time_s", "separation_time_s", "arrival_spread_s",
                 "max_ascent_velocity_ms", "max_descent_velocity_ms", "max_pitch_deg",
                 "max_bending_moment_MNm", "max_shear_force_MN", "max_stress_MPa",
-                "max_utilisation", "gas_used_local_m3", "gas_used_free_air_m3",
+                "max_utilisation", "max_slope_deg", "max_slope_x_m", "max_slope_time_s",
+                "gas_used_local_m3", "gas_used_free_air_m3",
                 "gas_initial_free_air_m3", "gas_total_free_air_m3", "gas_vented_free_air_m3",
                 "gas_purged_free_air_m3", "supply_bag_hours", "end_time_s")
         out = {"control": self.control, **{k: h[k] for k in keys}, "arrival_time_s": arr,
                "final_height_m": {str(b): round(float(v), 2)
                                   for b, v in zip(ds.bag.values, ds.height.values[-1])},
-               "criteria": self.criteria, "reasons": self.reasons,
+               "criteria": self.criteria, "reasons": self.reasons, "warnings": self.warnings,
                "events": [{"time_s": e["time_s"], "kind": e["kind"], "bag": e["bag"]}
                           for e in self.events],
                "error": self.error or None}
@@ -164,7 +171,7 @@ def snapshots(run) -> dict:
 
 def build_result(run, error: str | None) -> Result:
     """The Dataset of a finished (or failed) run."""
-    from flexlift.ascent.strength import strength
+    from flexlift.ascent.strength import seabed_profile, strength
 
     P, rec, R = run.plant, run.rec, run.R
     nrow = int(rec.counts[0])
@@ -211,6 +218,15 @@ def build_result(run, error: str | None) -> Result:
         stress = np.abs(Ms).max(0) / Z
         data["stress_max"] = (("x",), stress, {"units": "Pa", "long_name": "envelope: largest hull girder bending stress |M| / Z"})
         data["utilisation_max"] = (("x",), stress / allow, {"units": "1", "long_name": "envelope: stress over the allowable stress"})
+        bed = seabed_profile(P, snaps)
+        for name, long in (("grounded_from", "aft-most point on the seabed (a touchdown point)"),
+                           ("grounded_to", "forward-most point on the seabed (a touchdown point)"),
+                           ("grounded_length", "length of the structure on the seabed")):
+            data[name] = (("time_strength",), bed[name], {"units": "m", "long_name": long})
+        data["slope_max"] = (("x",), np.abs(bed["slope"]).max(0), {
+            "units": "rad", "long_name": "envelope: largest slope of the structure (retained modes)"})
+        data["slope_largest"] = (("time_strength",), np.abs(bed["slope"]).max(1), {
+            "units": "rad", "long_name": "largest slope along the structure"})
     ds = xr.Dataset(data, coords=coords)
     events = event_list(run)
     _attributes(ds, run, events, t, Mmax, Vmax, error)
@@ -281,13 +297,46 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
         **gas_budget(run),
         "max_stress_MPa": _r(float(ds["stress_max"].max()) / 1e6, 2) if "stress_max" in ds else None,
         "max_utilisation": _r(float(ds["utilisation_max"].max()), 3) if "utilisation_max" in ds else None,
+        **steepest(ds),
         "end_time_s": _r(float(t[-1]) if t.size else 0.0, 1),
     }
     reasons = explain(run, events, crit, vmax, vdown, pmax, error)
-    ds.attrs.update(title=f"flexlift ascent of {sc.name}, {run.mode} control", scenario=sc.name,
+    warnings = slope_warnings(ds, sc.limits.slope_validity_deg)
+    ds.attrs.update(warnings=json.dumps(warnings),title=f"flexlift ascent of {sc.name}, {run.mode} control", scenario=sc.name,
                     scenario_checksum=sc.checksum(), control=run.mode, events=json.dumps(events),
                     criteria=json.dumps(crit), reasons=json.dumps(reasons), headline=json.dumps(headline), error=error or "",
                     max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax)
+
+
+def steepest(ds) -> dict:
+    """Headline keys of the largest slope along the structure: degrees, where [m], when [s]
+    (None without the strength samples)."""
+    if "slope_largest" not in ds:
+        return {"max_slope_deg": None, "max_slope_x_m": None, "max_slope_time_s": None}
+    k = int(np.argmax(ds["slope_largest"].values))
+    j = int(np.argmax(ds["slope_max"].values))
+    return {"max_slope_deg": _r(np.degrees(float(ds["slope_largest"].values[k])), 3),
+            "max_slope_x_m": _r(float(ds["x"].values[j]), 1),
+            "max_slope_time_s": _r(float(ds["time_strength"].values[k]), 1)}
+
+
+def slope_warnings(ds, validity_deg: float) -> list[str]:
+    """A warning when the structure gets steeper than ``validity_deg`` (the small-deflection
+    beam's validity, ``limits.slope_validity_deg``): where, from when to when, and how steep."""
+    if "slope_largest" not in ds:
+        return []
+    deg = np.degrees(ds["slope_largest"].values)
+    over = deg > validity_deg
+    if not over.any():
+        return []
+    t = ds["time_strength"].values
+    h = steepest(ds)
+    return [f"the structure's slope passed {validity_deg:g} deg from {t[over][0]:.0f} s to "
+            f"{t[over][-1]:.0f} s (largest {h['max_slope_deg']:.1f} deg at x = "
+            f"{h['max_slope_x_m']:.0f} m, {h['max_slope_time_s']:.0f} s): beyond the "
+            "small-deflection beam's validity; heights, moments and stresses there are "
+            "approximate (a gentler plan: a slower ascent, a shorter stage delay, more lift "
+            "points)"]
 
 
 def _fault_before(events, time: float | None) -> str:

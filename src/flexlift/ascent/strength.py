@@ -7,10 +7,18 @@ structural and added mass, hull drag, seabed contact, the released suction, the 
 the internal bags' buoyancy over their spans; and point loads: the external bags' buoyancy
 with their drag, and the point masses with their inertia. Shear and moment follow by statics
 (:func:`flexlift.loads.strength.shear_moment`).
+
+The seabed's contact and released suction are taken as the loop applies them: at its strips
+(:func:`flexlift.ascent.plant.strip_points`), each strip's force spread over its cell (the
+cells tile the structure, a cell as long as the strip's quadrature weight; their edges are
+jumps of the grid) as a linear load with the strip's force as resultant and the strip's point
+as centroid. So the loads have exactly the force and moment the simulation applied, also
+where a stiff contact spring changes from strip to strip (a held stretch beside a lifted one).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,26 +26,53 @@ import numpy as np
 from flexlift.loads.strength import shear_moment
 from flexlift.physics import gas, hydro, seabed
 
-#: most grid points along the structure (fine meshes are sampled more coarsely)
+#: most points of the stored shear and moment along the structure (fine meshes are sampled
+#: more coarsely)
 MAX_POINTS = 1001
-#: snapshots evaluated at once (bounds the temporary arrays of long runs on fine grids)
-CHUNK = 64
+#: the statics are integrated on up to this many times as many points (kept: every so many)
+MAX_REFINE = 4
+#: grid points per half-wave of the highest retained flexible mode: the loads of the
+#: retained modes (inertia, drag) are smooth on this scale, and sampled less finely the
+#: statics no longer close (the staged pipeline's 40 modes on 1,000 points: a closing moment
+#: of 10 % of the largest; on 4,000: 0.6 %). The finer grid is only integrated on; the
+#: stored values are those at the coarser grid's points.
+POINTS_PER_HALF_WAVE = 100
+#: values (snapshots x grid points) evaluated at once: bounds the temporary arrays of long runs
+#: on fine grids to about 0.25 MB each
+CHUNK_VALUES = 32_768
 
 
-def strength_grid(plant) -> tuple[np.ndarray, np.ndarray]:
-    """Grid x [m] along the structure (internal bags' span ends doubled: the jumps of their
-    loads) and the evaluation points just aft/forward of them [m]."""
+def strip_cells(plant) -> np.ndarray:
+    """Edges [m] (ns + 1,) of the strips' cells: each strip's quadrature weight laid end to
+    end from the aft end."""
+    return np.concatenate([[0.0], np.cumsum(plant.arrays.strip_weight)])
+
+
+def strength_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Grid x [m] along the structure to integrate the statics on (internal bags' span ends
+    and the strips' cell edges doubled: the jumps of their loads), the evaluation points just
+    aft/forward of them [m], and the indices of the points whose values are stored: an even
+    grid of up to :data:`MAX_POINTS` (8 per element) and the span ends; the integration grid
+    refines it up to :data:`MAX_REFINE` times for :data:`POINTS_PER_HALF_WAVE`."""
     hull = plant.hull
     L = hull.length
-    n = min(8 * hull.n_elements, MAX_POINTS - 1)
-    base = np.linspace(0.0, L, n + 1)
-    ends = sorted({e for s in plant.spans if s is not None for e in s if 0 < e < L})
+    n_out = min(8 * hull.n_elements, MAX_POINTS - 1)
+    n_half_waves = plant.arrays.nr - 1  # the highest flexible mode's (n + 1 nodes)
+    refine = int(np.clip(math.ceil(POINTS_PER_HALF_WAVE * n_half_waves / n_out), 1, MAX_REFINE))
+    base = np.linspace(0.0, L, n_out * refine + 1)
+    spans = {float(e) for s in plant.spans if s is not None for e in s if 0 < e < L}
+    cells = {float(e) for e in strip_cells(plant)[1:-1] if 0 < e < L}
+    ends = sorted(spans | cells)
     x = np.sort(np.concatenate([base, ends, ends]))
     side = np.zeros_like(x)
+    stored = np.zeros(x.size, dtype=bool)
     for e in ends:
         k = np.flatnonzero(np.isclose(x, e))
         side[k[0]], side[k[-1]] = -1.0, 1.0
-    return x, np.clip(x + side * 1e-9 * L, 0.0, L)
+        stored[k] = e in spans
+    on_base = np.searchsorted(x, base[::refine])  # the first of any equal values
+    stored[on_base] = True
+    return x, np.clip(x + side * 1e-9 * L, 0.0, L), np.flatnonzero(stored)
 
 
 @dataclass(frozen=True)
@@ -48,9 +83,8 @@ class _Grid:
     weight: np.ndarray  # (nx,) submerged weight per length [N/m]
     mass: np.ndarray  # (nx,) structural plus added mass per length [kg/m]
     drag: np.ndarray  # (nx,) 1/2 rho C_D B [kg/m^2]
-    k: np.ndarray  # (nx,) contact stiffness per length
-    c: np.ndarray  # (nx,) contact damping per length
-    hold: np.ndarray  # (nx,) holding shape [1/m]
+    cell: np.ndarray  # (nx,) the strip whose cell holds each point
+    spread: np.ndarray  # (nx,) line load there per unit line load of that strip [-]
 
     @classmethod
     def of(cls, plant, xe: np.ndarray) -> _Grid:
@@ -58,12 +92,14 @@ class _Grid:
         el = hull.element_of(xe)
         m = hull.mass_per_length[el]
         xs = plant.strip_x
+        edges = strip_cells(plant)
+        cell = np.clip(np.searchsorted(edges, xe, side="right") - 1, 0, xs.size - 1)
+        mid, wid = 0.5 * (edges[cell] + edges[cell + 1]), a.strip_weight[cell]
+        spread = 1.0 + 12.0 * (xs[cell] - mid) * (xe - mid) / wid**2  # centroid at the strip
         return cls(plant.modes.shape_at(xe)[:, : a.nr],
                    hull.wet_weight_per_length(plant.gravity, plant.seawater_density,
                                               plant.steel_density)[el],
-                   m + plant.mass_line, np.interp(xe, xs, a.strip_drag),
-                   np.interp(xe, xs, a.strip_k), np.interp(xe, xs, a.strip_c),
-                   seabed.holding_shape(xe, hull.length, *plant.hold_stern_bow))
+                   m + plant.mass_line, np.interp(xe, xs, a.strip_drag), cell, spread)
 
 
 def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) -> np.ndarray:
@@ -72,12 +108,10 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
     :func:`flexlift.ascent.result.snapshots`)."""
     G = grid or _Grid.of(plant, xe)
     a = plant.arrays
-    w, v, acc = snaps["q"] @ G.psi.T, snaps["v"] @ G.psi.T, snaps["a"] @ G.psi.T
+    v, acc = snaps["v"] @ G.psi.T, snaps["a"] @ G.psi.T
     q = -G.weight - G.mass * acc
     q += hydro.drag(v - snaps["current"][:, None], G.drag)
-    held = ~snaps["sep"][:, :1]  # (nt, 1): one holding group
-    q += seabed.contact_load(w, v, G.k, G.c, held)
-    q -= np.where(held, 0.0, snaps["H"][:, :1] * G.hold)
+    q += seabed_loads(plant, snaps)[:, G.cell] * G.spread
     if np.any(snaps["noise"]):
         q += np.array([np.interp(xe, plant.strip_x, row) for row in snaps["noise"]])
     for i, span in enumerate(plant.spans):
@@ -86,6 +120,16 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
             inside = (xe >= span[0]) & (xe <= span[1])
             q += np.outer(lift / (span[1] - span[0]), inside)
     return q
+
+
+def seabed_loads(plant, snaps: dict) -> np.ndarray:
+    """Line loads [N/m] (nt, ns) of the seabed at the loop's strips in every snapshot: the
+    contact (tension-capable where the strip's group is held) and the released suction."""
+    a = plant.arrays
+    w, v = snaps["q"] @ a.strip_shape.T, snaps["v"] @ a.strip_shape.T
+    held = ~snaps["sep"][:, a.strip_group]
+    q = seabed.contact_load(w, v, a.strip_k, a.strip_c, held)
+    return q - np.where(held, 0.0, snaps["H"][:, a.strip_group] * a.strip_hold)
 
 
 def point_loads(plant, snaps: dict) -> list[tuple[float, np.ndarray]]:
@@ -110,12 +154,37 @@ def point_loads(plant, snaps: dict) -> list[tuple[float, np.ndarray]]:
 def strength(plant, snaps: dict):
     """(x [m], V [N] (nt, nx), M [N m] (nt, nx)) along the structure at the snapshots
     (``snaps``: the snapshot arrays stacked over time, names as in the loop's record)."""
-    x, xe = strength_grid(plant)
+    x, xe, keep = strength_grid(plant)
     nt = snaps["t"].size
-    V, M = np.empty((nt, x.size)), np.empty((nt, x.size))
+    V, M = np.empty((nt, keep.size)), np.empty((nt, keep.size))
     grid = _Grid.of(plant, xe)
-    for a in range(0, nt, CHUNK):
-        part = {k: v[a:a + CHUNK] for k, v in snaps.items()}
-        V[a:a + CHUNK], M[a:a + CHUNK] = shear_moment(x, line_loads(plant, xe, part, grid),
-                                                      point_loads(plant, part))
-    return x, V, M
+    chunk = max(1, CHUNK_VALUES // x.size)
+    for a in range(0, nt, chunk):
+        part = {k: v[a:a + chunk] for k, v in snaps.items()}
+        Vc, Mc = shear_moment(x, line_loads(plant, xe, part, grid), point_loads(plant, part))
+        V[a:a + chunk], M[a:a + chunk] = Vc[:, keep], Mc[:, keep]
+    return x[keep], V, M
+
+
+def seabed_profile(plant, snaps: dict) -> dict:
+    """Where the structure lies on the seabed and how steep it is, at every snapshot.
+
+    A strip is *grounded* while its group is held or it is within the plant's liftoff
+    clearance (5 cm) of the seabed. Returns ``grounded_from``, ``grounded_to`` (nt,) [m]: the
+    aft-most and forward-most grounded points (the touchdown points of a structure peeled
+    from one end; nan when nothing is grounded), ``grounded_length`` (nt,) [m], and the slope
+    dw/dx of the retained modes on the strength grid: ``x`` (nx,) [m], ``slope`` (nt, nx) [rad]."""
+    from flexlift.ascent.plant import slope_at
+
+    a = plant.arrays
+    w = snaps["q"] @ a.strip_shape.T  # (nt, ns), as the loop sees the strips
+    grounded = (w < a.liftoff_clearance) | ~snaps["sep"][:, a.strip_group]
+    xs = plant.strip_x
+    any_ = grounded.any(axis=1)
+    first = np.where(any_, xs[np.argmax(grounded, axis=1)], np.nan)
+    last = np.where(any_, xs[xs.size - 1 - np.argmax(grounded[:, ::-1], axis=1)], np.nan)
+    x, _, keep = strength_grid(plant)
+    x = x[keep]
+    slope = snaps["q"] @ slope_at(plant.modes, x)[:, : a.nr].T
+    return {"grounded_from": first, "grounded_to": last,
+            "grounded_length": grounded @ a.strip_weight, "x": x, "slope": slope}

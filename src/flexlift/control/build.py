@@ -10,6 +10,7 @@ import numpy as np
 from flexlift import constants as C
 from flexlift.control.controller import MODE_CODES, ControlArrays, ControlState, new_state
 from flexlift.control.profile import valve_profile
+from flexlift.control.sequence import start_times
 from flexlift.errors import InputError
 from flexlift.fuzzy.tables import Table2D
 
@@ -134,6 +135,23 @@ def fuzzy_maps(scenario, engine="table"):
     return None, supervisor, FillMap(fill_fn)
 
 
+def bag_pulls(scenario, plant, mode: str = "decentralized") -> np.ndarray:
+    """The breakout pull of each of ``plant``'s external bags as gas volume [m^3]: the pull of
+    :func:`breakout_pull` shaped so that its resultant sits on the suction's centroid
+    (``control.shape_breakout_pull``, coupled plant, closed-loop modes), else equal shares."""
+    a = plant.arrays
+    x = plant.x_point[np.flatnonzero(plant.external)]
+    pull = breakout_pull(scenario, float(a.H0.sum())) / a.rho_g  # [m^3]
+    if not x.size:
+        return np.zeros(0)
+    if (mode in ("coordinated", "decentralized") and scenario.control.shape_breakout_pull
+            and plant.kind == "coupled"):
+        share = (a.H0 / a.H0.sum())[a.strip_group] if a.H0.sum() > 0 else 1.0 / a.ng
+        hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * share * plant.strip_x))
+        return shaped_pull(pull, x, hold_centroid)
+    return np.full(x.size, pull / max(x.size, 1))
+
+
 def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
                    ) -> tuple[ControlArrays, ControlState]:
     """Constants and memory of the controllers of ``plant``'s external bags in ``mode``."""
@@ -141,14 +159,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
     a = plant.arrays
     bags = np.flatnonzero(plant.external)
     x = plant.x_point[bags]
-    rho_g = a.rho_g
-    pull = breakout_pull(scenario, float(a.H0.sum())) / rho_g  # [m^3]
-    if mode in ("coordinated", "decentralized") and c.shape_breakout_pull and plant.kind == "coupled":
-        xs = plant.strip_x
-        hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * xs))
-        V_pull = shaped_pull(pull, x, hold_centroid)
-    else:
-        V_pull = np.full(x.size, pull / max(x.size, 1))
+    V_pull = bag_pulls(scenario, plant, mode)
     half = 0.5 * np.ptp(x) if x.size > 1 else 1.0
     s = c.supervisor
     values = table.values if table is not None else np.zeros((2, 2))
@@ -166,5 +177,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
         k_height=c.height_integral_gain_m2_s, filter_time=c.measurement_filter_s,
         ref_T=prof.duration if prof else 0.0, ref_z=prof.z if prof else np.zeros(2),
         ref_v=prof.v if prof else np.zeros(2),
-        table=np.ascontiguousarray(values), fill_v=fill_map.table.values)
+        table=np.ascontiguousarray(values), fill_v=fill_map.table.values,
+        start=start_times(scenario, plant.names, plant.x_point, plant.external)[bags],
+        staged=c.sequence is not None)
     return arrays, new_state(bags.size)

@@ -17,13 +17,22 @@ per bag:
    |e| < :data:`ADAPT_BAND`, so transients do not wind it up) so that a bag whose share of the
    lift differs from its neutral volume still arrives: no steady error on an unbalanced hull. Before separation V_d holds the breakout pull.
 4. **Coordination** (coordinated mode): V_d -= (k_θ θ + k_θ' θ') ξ_i, θ the slope of the
-   least-squares line through the live bags' heights and ξ_i the bag's normalised lever.
+   least-squares line through the live bags' heights and ξ_i the bag's normalised lever (in a
+   staged lift, through their height errors z - z_ref among the bags under way: the
+   sequence tilts the structure on purpose, and levelling keeps each group on its plan).
 5. **Fill**, SIFSMC on ε = V_d - V: s = ε' + λ ε (ε' a filtered difference, time constant
    :data:`DERIV_TAU`), d = s / sqrt(1 + λ^2) / d_scale -> the monotone fill map -> fill flow,
    only beyond the deadband.
 6. **Purge**, PID on the excess V - V_d -> valve opening in [0, 1], from beyond the deadband and
    while its integral is positive; anti-windup by conditional integration. Fill is blocked
    while the valve is open.
+
+**Staged lift** (``control.sequence``, :mod:`flexlift.control.sequence`): a bag is passive
+until its start time (it holds its neutral volume: no pull, no reference); from then it pulls,
+and once the hold of its own stretch of the structure has let go (the plant gives each stage
+its own stretch of the seabed's suction) its reference begins from the height it is at then
+(in coordinated mode, the mean of the bags starting with it): the structure peels off the
+seabed stage by stage. Without a sequence every start time is 0 and nothing changes.
 
 Modes: decentralized (each bag on its own measurements; the moment of separation is the one
 shared signal), coordinated, and open-loop (fill to the breakout volume, never purge). The
@@ -86,6 +95,8 @@ class ControlArrays(NamedTuple):
     table: np.ndarray  # (g, g) supervisor u on [-1, 1]^2
     fill_v: np.ndarray  # (m,) fill map: fill fraction (non-decreasing) at normalised distances
     #                     evenly over [0, 1] (0 below, 1 above)
+    start: np.ndarray  # (nc,) start time of each bag in a staged lift (all 0 if not staged) [s]
+    staged: bool  # a staged lift: per-group reference starts, levelling on the height errors
 
 
 class ControlState(NamedTuple):
@@ -106,6 +117,9 @@ class ControlState(NamedTuple):
     u: np.ndarray  # supervisor output [-]
     V_d: np.ndarray  # desired volume [m^3]
     z_ref: np.ndarray  # reference height [m]
+    zd_ref: np.ndarray  # reference speed [m/s]
+    t_free: np.ndarray  # time the bag's hold let go (nan: not yet) [s]
+    started: np.ndarray  # bool: the bag's start time in a staged lift has come
     fill: np.ndarray  # fill flow command [m^3/s]
     opening: np.ndarray  # purge valve opening [-]
     flags: np.ndarray  # [0] first sample done, [1] some bag separated
@@ -120,7 +134,8 @@ def new_state(nc: int) -> ControlState:
     z = np.zeros
     return ControlState(z(nc), z(nc), z(nc), z(nc), z(nc), z(nc), z(nc), np.full(nc, np.nan),
                         z(nc), np.ones(nc, dtype=np.bool_), z(nc), z(nc), z(nc), z(nc), z(nc),
-                        z(nc), z(nc), np.zeros(2, dtype=np.bool_), z(nc), z(nc), z(nc),
+                        z(nc), np.full(nc, np.nan), np.zeros(nc, dtype=np.bool_), z(nc), z(nc),
+                        np.zeros(2, dtype=np.bool_), z(nc), z(nc), z(nc),
                         np.zeros(nc, dtype=np.bool_))
 
 
@@ -140,13 +155,17 @@ def observe(t, z, zd, separated, C, S):
     else:
         S.z_f[:] = z
         S.zd_f[:] = zd
+    for i in range(nc):
+        S.started[i] = t >= C.start[i] - 1e-9
+        if separated[i] and math.isnan(S.t_free[i]):
+            S.t_free[i] = t
     _note_separations(t, separated, C, S)
     for i in range(nc):
         if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
-            S.z_ref[i], S.e_in[i], S.r_in[i] = 0.0, 0.0, 0.0
+            S.z_ref[i], S.zd_ref[i], S.e_in[i], S.r_in[i] = 0.0, 0.0, 0.0, 0.0
             continue
         pos, vel = reference(t - S.t_sep[i], C.target - S.z0[i], C)
-        S.z_ref[i] = S.z0[i] + pos
+        S.z_ref[i], S.zd_ref[i] = S.z0[i] + pos, vel
         S.e_in[i] = min(max((S.z_ref[i] - S.z_f[i]) / C.e_scale, -1.0), 1.0)
         S.r_in[i] = min(max((vel - S.zd_f[i]) / C.r_scale, -1.0), 1.0)
         if S.active[i] and C.k_height > 0.0 and abs(S.e_in[i]) < ADAPT_BAND:
@@ -167,16 +186,25 @@ def reference(tau, distance, C):
 
 @jit
 def _note_separations(t, separated, C, S):
-    """Start the reference of every bag whose hold let go at this sample."""
+    """Start the reference of every bag whose hold has let go and whose start time has come."""
     new = False
     for i in range(separated.size):
-        if separated[i] and math.isnan(S.t_sep[i]):
+        if math.isnan(S.t_sep[i]) and not math.isnan(S.t_free[i]) and S.started[i]:
             S.t_sep[i] = t
             new = True
     if not new:
         return
     S.flags[1] = True
-    if C.mode == COORDINATED:  # one heave reference from the live bags' mean height
+    if C.mode == COORDINATED and C.staged:  # each group from the mean height of its bags
+        total, count = 0.0, 0
+        for i in range(S.z_f.size):
+            if S.t_sep[i] == t and S.active[i]:
+                total += S.z_f[i]
+                count += 1
+        for i in range(S.z_f.size):
+            if S.t_sep[i] == t:
+                S.z0[i] = total / count if count else S.z_f[i]
+    elif C.mode == COORDINATED:  # one heave reference from the live bags' mean height
         total, count = 0.0, 0
         for i in range(S.z_f.size):
             if S.active[i]:
@@ -207,8 +235,8 @@ def act(V, C, S):
     (nc,) [m^3], into ``S.V_d``, ``S.fill`` [m^3/s] and ``S.opening`` [-]."""
     nc = V.size
     for i in range(nc):
-        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
-            S.V_d[i] = C.V_neutral[i] + C.V_pull[i]
+        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:  # held: the pull from its start
+            S.V_d[i] = C.V_neutral[i] + (C.V_pull[i] if S.started[i] else 0.0)
         else:
             S.V_d[i] = C.V_neutral[i] + S.adapt[i] + S.u[i] * C.dV_max[i]
     if C.mode == COORDINATED:
@@ -250,10 +278,11 @@ def _purge(i, excess, C, S):
 
 @jit
 def _level(C, S):
-    """Coordinated mode: the pitch-levelling correction of every desired volume."""
+    """Coordinated mode: the pitch-levelling correction of every desired volume (staged: of
+    the bags under way, on their height errors)."""
     total, count = 0.0, 0
     for i in range(S.z_f.size):
-        if S.active[i]:
+        if _levelled(i, C, S):
             total += C.x[i]
             count += 1
     if count < 2:
@@ -261,16 +290,35 @@ def _level(C, S):
     mean = total / count
     xx, xz, xzd = 0.0, 0.0, 0.0
     for i in range(S.z_f.size):
-        if S.active[i]:
+        if _levelled(i, C, S):
             d = C.x[i] - mean
             xx += d * d
-            xz += d * S.z_f[i]
-            xzd += d * S.zd_f[i]
+            if C.staged:
+                xz += d * (S.z_f[i] - S.z_ref[i])
+                xzd += d * (S.zd_f[i] - S.zd_ref[i])
+            else:
+                xz += d * S.z_f[i]
+                xzd += d * S.zd_f[i]
     if xx <= 0.0:
         return
     corr = C.k_pitch * xz / xx + C.k_pitch_rate * xzd / xx
+    if not C.staged:
+        for i in range(S.z_f.size):
+            S.V_d[i] -= corr * C.lever[i]
+        return
+    half = 0.0  # the levers of the bags under way, about their own centre
     for i in range(S.z_f.size):
-        S.V_d[i] -= corr * C.lever[i]
+        if _levelled(i, C, S):
+            half = max(half, abs(C.x[i] - mean))
+    for i in range(S.z_f.size):
+        if _levelled(i, C, S):
+            S.V_d[i] -= corr * (C.x[i] - mean) / half
+
+
+@jit
+def _levelled(i, C, S):
+    """Whether bag ``i`` takes part in the levelling: live, and in a staged lift under way."""
+    return S.active[i] and (not C.staged or not math.isnan(S.t_sep[i]))
 
 
 @jit

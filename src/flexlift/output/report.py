@@ -140,6 +140,17 @@ def _disturbances(d) -> str:
     return "; ".join(parts) or "none"
 
 
+def _sequence(seq) -> str:
+    """The staged lift in words ("all bags at once" without one)."""
+    if seq is None:
+        return "all bags at once"
+    if seq.groups is not None:
+        how = f"{len(seq.groups)} named groups"
+    else:
+        how = (f"groups of {seq.group_size} from the {'aft end (x = 0)' if seq.from_end == 'start' else 'forward end'}")
+    return f"staged: {how}, {seq.delay_s:g} s apart; each stage's stretch breaks out on its own"
+
+
 def _particulars(scenario) -> str:
     h, env, c = scenario.hull, scenario.environment, scenario.control
     mass = f"{h.displacement_t:g} t" if h.displacement_t is not None else "per element (see scenario)"
@@ -154,6 +165,8 @@ def _particulars(scenario) -> str:
         ("Water depth at the wreck", f"{env.water_depth_m:g} m"),
         ("Target height above the seabed", f"{c.target_height_m:g} m"),
         ("Planned ascent speed", f"{c.ascent_speed_m_s:g} m/s"),
+        ("Lift sequence", _sequence(c.sequence)),
+        ("Retained flexible modes", f"{scenario.simulation.retained_flexible_modes}"),
         ("Limits", f"ascent < {scenario.limits.ascent_velocity_m_s:g} m/s, "
                    f"descent < {scenario.limits.descent_velocity_m_s:g} m/s, "
                    f"pitch < {scenario.limits.pitch_deg:g}°, no surface breach"),

@@ -307,6 +307,21 @@ class Coordination(_Section):
     pitch_rate_gain_m3s_rad: real(0, 1.0e8) = 2000.0
 
 
+class Sequence(_Section):
+    """A staged lift (SPEC §9.1): every bag pulls until the suction lets go; then the external
+    bags begin their ascent in groups, one group every ``delay_s`` (the first at once), each
+    from where it is; until its start a bag is passive and only holds its share of the weight
+    (its neutral volume), so the structure peels off the seabed from one end. Either
+    ``groups`` (every external bag named once, in order) or the bags in order of position
+    from ``from_end``, ``group_size`` at a time."""
+
+    groups: Annotated[list[Annotated[list[Name], Field(min_length=1, max_length=MAX_ITEMS)]],
+                      Field(min_length=1, max_length=MAX_ITEMS)] | None = None
+    from_end: Literal["start", "end"] = "start"  # start: x = 0 first (a pipe's KP 0, a ship's stern)
+    group_size: whole(1, MAX_ITEMS) = 1
+    delay_s: real(0, MAX_TIME_S) = 60.0  # between the ascents of consecutive groups
+
+
 ControlMode = Literal["decentralized", "coordinated", "paper", "open-loop"]
 
 
@@ -332,6 +347,7 @@ class Control(_Section):
     fill: FillControl = FillControl()
     purge: PurgeControl = PurgeControl()
     coordination: Coordination = Coordination()
+    sequence: Sequence | None = None  # a staged lift; none: every bag starts at once
     height_noise_m: real(0, 100) = 0.0
     velocity_noise_m_s: real(0, 10) = 0.0
     volume_noise_m3: real(0, 10_000) = 0.0
@@ -345,6 +361,7 @@ class Limits(_Section):
     pitch_deg: real(0.01, 90) = 15.0
     arrival_tolerance_m: real(0.001, 1_000) = 1.0
     surface_clearance_m: real(0, 1_000) = 0.0  # a bag top closer than this to the surface breaches
+    slope_validity_deg: real(0.1, 45) = 10.0  # a warning beyond: the small-deflection beam's validity
 
 
 # --------------------------------------------------------------------------- faults
@@ -406,7 +423,8 @@ class Simulation(_Section):
     duration_s: Duration = 6000.0  # stops earlier once the target has been held for hold_time_s
     hold_time_s: Time = 600.0
     time_step_s: real(1.0e-4, 10) = 0.1  # integration step (at most the control period)
-    retained_flexible_modes: whole(0, 1_000) = 3
+    # a number, or "auto": as many as the lift points need (ascent/plant.py retained_flexible)
+    retained_flexible_modes: whole(0, 1_000) | Literal["auto"] = 3
     output_interval_s: Duration = 1.0
     strength_interval_s: Duration = 10.0  # time spacing of stored shear/moment distributions
 

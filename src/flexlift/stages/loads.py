@@ -14,7 +14,7 @@ from flexlift.ascent.checks import plan_checks, refuse_unworkable
 from flexlift.ascent.plant import coupled_plant
 from flexlift.ascent.result import section_modulus
 from flexlift.loads.liftplan import LiftPlan, plan_lift
-from flexlift.loads.strength import Strength, lift_load_case, strength
+from flexlift.loads.strength import Strength, balanced_case, lift_load_case, strength
 from flexlift.output.files import write_text
 from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.structure.hull import hull_from_scenario
@@ -25,6 +25,22 @@ NAME = "loads"
 
 def _extreme(e, scale: float) -> dict:
     return {"value": e.value / scale, "x_m": e.x, "node": e.node}
+
+
+def still_water(scenario, hull, plan, per_element: int = 50):
+    """(load case, strength) of the plan in still water: bags at full lift against the weight
+    times the breakout factor; a pipeline's case closed first
+    (:func:`~flexlift.loads.strength.balanced_case`: over its length any imbalance would dwarf
+    its moments; the ship's stays the paper's, with its published closing values)."""
+    case = lift_load_case(plan, hull)
+    if scenario.pipe is not None:
+        case = balanced_case(case, {b.name for b in plan.bags})
+    return case, strength(case, hull, per_element)
+
+
+def utilisation_along(scenario, st: Strength) -> np.ndarray:
+    """sigma / sigma_allow = |M| / (Z sigma_allow) at ``st.x`` [-]."""
+    return np.abs(st.M) / section_modulus(scenario, st.x) / (scenario.hull.allowable_stress_MPa * 1e6)
 
 
 def stress_of(scenario, st: Strength) -> dict:
@@ -117,7 +133,9 @@ def _tables(summary: dict) -> list[Table]:
         note=(
             "Statics of the free beam integrated from the aft end on "
             f"{summary['samples']} samples; M sagging positive. The closing values measure "
-            "the imbalance of the load case (bag lift rounded up to the tonne)."
+            "the imbalance of the load case (bag lift rounded up to the tonne); a pipeline's "
+            "case is closed first (the bags' lifts scaled to the load, a linear trim load "
+            "for the rest of the moment): over its length any imbalance would dwarf its moments."
         ),
     )
     return [bags, st]
@@ -149,8 +167,7 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
     """
     hull = hull_from_scenario(scenario)
     plan = plan_lift(scenario, hull)
-    case = lift_load_case(plan, hull)
-    st = strength(case, hull, per_element)
+    case, st = still_water(scenario, hull, plan, per_element)
     summary = summary_of(plan, hull, st, _layout_text(scenario, plan))
     plant = coupled_plant(scenario, hull, plan)
     refuse_unworkable(scenario, plant)

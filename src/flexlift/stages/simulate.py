@@ -16,7 +16,21 @@ from flexlift.scenario import ControlMode
 MODES = typing.get_args(ControlMode)
 
 
-def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
+def static_view(scenario) -> dict:
+    """What the seabed figure of a long structure adds to the ascent: the slope validity [deg]
+    and the still-water utilisation along it (``x`` [m], ``utilisation`` [-])."""
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.stages.loads import still_water, utilisation_along
+    from flexlift.structure.hull import hull_from_scenario
+
+    hull = hull_from_scenario(scenario)
+    _, st = still_water(scenario, hull, plan_lift(scenario, hull), per_element=4)
+    return {"validity_deg": scenario.limits.slope_validity_deg, "x": st.x,
+            "utilisation": utilisation_along(scenario, st)}
+
+
+def _write(result, out: Path, mode: str, primary: bool, seabed: dict | None = None
+           ) -> list[Figure]:
     from flexlift.output.plots import ascent
     from flexlift.output.plots._style import draw
     from flexlift.output.results import save_netcdf, to_csv
@@ -38,6 +52,14 @@ def _write(result, out: Path, mode: str, primary: bool) -> list[Figure]:
         figs.append(Figure(draw(fd / f"simulate_{mode}_moment.png", ascent.moment_map, result),
                            f"Bending-moment envelope over the whole run and the bending "
                            f"moment along the hull in time, {window} ({mode} control)."))
+    if seabed is not None and "x" in result.dataset.coords:
+        figs.append(Figure(draw(fd / f"simulate_{mode}_seabed.png", ascent.seabed_and_stress,
+                                result, **seabed),
+                           f"The part of the structure on the seabed in time (its edges are "
+                           f"the touchdown points), the largest slope along it against the "
+                           f"small-deflection beam's validity, {window}, and the bending-stress "
+                           f"utilisation along it: its envelope over the lift ({mode} control) "
+                           f"and in still water with the bags at full lift (the loads stage)."))
     return figs
 
 
@@ -89,8 +111,12 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
             raise
     if primary is None:
         primary = mode == scenario.control.mode
-    figures = _write(result, Path(out), mode, primary) if out is not None else []
+    long_ = scenario.pipe is not None or scenario.control.sequence is not None
+    figures = (_write(result, Path(out), mode, primary,
+                      static_view(scenario) if long_ else None)
+               if out is not None else [])
     summary = result.summary()
+    warnings += result.warnings
     rows = [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")] for e in result.events]
     tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"], rows),
               gas_table(summary, mode)]

@@ -144,6 +144,45 @@ def moment_map(result):
     return fig
 
 
+def seabed_and_stress(result, validity_deg: float, x=None, utilisation=None):
+    """A long structure's lift: where it lies on the seabed in time (the touchdown points),
+    its largest slope in time against the small-deflection beam's validity, and the
+    bending-stress utilisation along it: the envelope over the lift and, given ``x`` [m] and
+    ``utilisation`` [-], the still-water case of the loads stage."""
+    ds = result.dataset
+    ts = ds.time_strength.values
+    t0, t1 = zoom_window(result)
+    w = _in(ts, t0, t1)
+    fig, (a1, a2, a3) = new_figure(3, 1, figsize=(8.0, 8.0), margins={"hgap": 0.65})
+    lo, hi = ds.grounded_from.values[w], ds.grounded_to.values[w]
+    a1.fill_between(ts[w], lo, hi, step="mid", alpha=0.35, color="C5", label="on the seabed")
+    a1.plot(ts[w], lo, color="C5", lw=1, label="touchdown points")
+    a1.plot(ts[w], hi, color="C5", lw=1)
+    a1.set_ylim(0.0, float(ds.x.values[-1]))
+    a1.set(xlabel=_TIME, ylabel="x along the structure [m]",
+           title=f"On the seabed, {result.control} control (touchdown points in time)")
+    a1.legend(loc="upper left")
+    a2.plot(ts[w], np.degrees(ds.slope_largest.values[w]), label="largest slope")
+    a2.axhline(validity_deg, color="C3", ls="--", lw=1,
+               label=f"small-deflection validity, {validity_deg:g} deg")
+    a2.set(xlabel=_TIME, ylabel="slope [deg]", title="Largest slope along the structure")
+    a2.legend(loc="upper right")
+    for ax in (a1, a2):
+        ax.set_xlim(t0, t1)
+        _event_lines(ax, result)
+    top = float(ds.utilisation_max.values.max())
+    a3.plot(ds.x.values, ds.utilisation_max.values, label="envelope over the lift")
+    if x is not None:
+        a3.plot(x, utilisation, color="C2", lw=1, label="still water, bags at full lift")
+        top = max(top, float(np.max(utilisation)))
+    a3.axhline(1.0, color="C3", ls="--", lw=1, label="allowable")
+    a3.set(xlabel="x along the structure [m]", ylabel="utilisation σ / σ_allow [-]",
+           title="Bending-stress utilisation")
+    a3.set_ylim(0.0, max(1.1, 1.05 * top))
+    a3.legend(loc="upper right")
+    return fig
+
+
 def compare(results):
     """Several control modes on one figure: mean height, hull pitch, fastest bag velocity over
     the union of their zoom windows, and the bending-moment envelopes."""
