@@ -121,14 +121,18 @@ def test_contact_springs_updated_strip_by_strip_equal_a_rebuild(line):
 
 
 # ------------------------------------------------------------------------- the controllers
-def test_a_bag_is_passive_until_its_start_then_pulls_then_rises(line):
+def _two_stages(line, mode):
+    """Controllers of the line in two stages of 20 bags, 100 s apart: (C, S, first, second)."""
     sc = line.with_changes(**{"pipe.elements": 40, "control.sequence":
                               {"group_size": 20, "delay_s": 100.0}})
-    P = coupled_plant(sc)
     table, _, fill = fuzzy_maps(sc)
-    C, S = controller_for(sc, P, "decentralized", table, fill)
+    C, S = controller_for(sc, coupled_plant(sc), mode, table, fill)
+    return C, S, C.start == 0.0, C.start == 100.0
+
+
+def test_a_bag_is_passive_until_its_start_then_pulls_then_rises(line):
+    C, S, first, second = _two_stages(line, "decentralized")
     nc = C.bags.size
-    first, second = C.start == 0.0, C.start == 100.0
     assert first.sum() == second.sum() == 20
     z, zd, V = np.zeros(nc), np.zeros(nc), C.V_neutral.copy()
     held = np.zeros(nc, dtype=bool)
@@ -145,13 +149,8 @@ def test_a_bag_is_passive_until_its_start_then_pulls_then_rises(line):
 
 
 def test_coordinated_stages_start_from_their_own_mean_height(line):
-    sc = line.with_changes(**{"pipe.elements": 40, "control.sequence":
-                              {"group_size": 20, "delay_s": 100.0}})
-    P = coupled_plant(sc)
-    table, _, fill = fuzzy_maps(sc)
-    C, S = controller_for(sc, P, "coordinated", table, fill)
+    C, S, first, second = _two_stages(line, "coordinated")
     nc = C.bags.size
-    first, second = C.start == 0.0, C.start == 100.0
     z = np.linspace(0.0, 1.0, nc)
     sample(50.0, z, np.zeros(nc), C.V_neutral.copy(), first, C, S)
     assert S.z0[first] == pytest.approx(np.full(20, z[first].mean()))
