@@ -219,3 +219,21 @@ def test_the_builtin_lines_headline_numbers_are_pinned(line_runs, mode):
     h = line_runs[mode].headline
     for key, value in LINE_HEADLINE[mode].items():
         assert h[key] == pytest.approx(value, rel=0.02), key
+
+
+def test_the_sequence_check_says_a_ship_is_too_stiff_to_peel(line, tanker):
+    from flexlift.ascent.checks import plan_checks
+
+    ok = {c.name: c for c in plan_checks(line, coupled_plant(line))}["sequence"]
+    assert ok.ok and "~36 m" in ok.message and "100 m" in ok.message
+    ship = tanker.with_changes(**{"control.sequence": {"group_size": 2, "delay_s": 60.0}})
+    bad = {c.name: c for c in plan_checks(ship, coupled_plant(ship))}["sequence"]
+    assert not bad.ok and "too stiff to peel" in bad.message
+    assert "sequence" not in {c.name for c in plan_checks(tanker, coupled_plant(tanker))}
+
+
+def test_slopes_are_angles_even_when_the_run_goes_wrong(tanker):
+    ship = tanker.with_changes(**{"control.sequence": {"group_size": 2, "delay_s": 60.0}})
+    r = simulate(ship, control="decentralized")
+    assert not r.criteria["pitch"] and r.warnings
+    assert 10.0 < r.headline["max_slope_deg"] <= 90.0

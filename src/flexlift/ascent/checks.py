@@ -11,7 +11,8 @@ calls it. The others are warnings, shown by ``flexlift loads`` and in the report
 - purge capacity: from which height up the planned speed cannot be held by purging (the
   planned ascent slows there, :mod:`flexlift.control.profile`);
 - fill: the time the supply takes to fill the breakout pull;
-- hull girder stress under the plan: sigma = M / Z against the allowable stress.
+- hull girder stress under the plan: sigma = M / Z against the allowable stress;
+- a staged lift: whether the structure is flexible enough to peel off in its stages.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import numpy as np
 from flexlift import constants as C
 from flexlift.control.build import bag_pulls, breakout_pull
 from flexlift.control.profile import speed_limit
+from flexlift.control.reference import trapezoid
 from flexlift.control.sequence import start_times
 from flexlift.errors import InputError
 from flexlift.physics import seabed
@@ -71,8 +73,34 @@ def refuse_unworkable(scenario, plant) -> None:
 
 def plan_checks(scenario, plant) -> list[Check]:
     """Every warning-level check of ``plant``'s lift plan (module docstring)."""
-    return [balance_check(plant), breakout_check(scenario, plant),
-            purge_check(scenario, plant), fill_check(scenario, plant)]
+    checks = [balance_check(plant), breakout_check(scenario, plant),
+              purge_check(scenario, plant), fill_check(scenario, plant)]
+    if scenario.control.sequence is not None:
+        checks.append(sequence_check(scenario, plant))
+    return checks
+
+
+def sequence_check(scenario, plant) -> Check:
+    """Whether the structure is flexible enough to be peeled off in the stages of
+    ``control.sequence``: a stage rising h ahead of the next bends the structure over the
+    length a heavy beam lifted off the seabed takes, l = (24 EI h / q)^(1/4) (SPEC §9.1); a
+    stage's stretch shorter than that does not peel, it pivots on the held one."""
+    c, hull = scenario.control, plant.hull
+    lead = trapezoid(c.sequence.delay_s, c.target_height_m, c.ascent_speed_m_s,
+                     c.ascent_acceleration_m_s2)[0]
+    q = plant.wet_weight / hull.length
+    EI = float(np.median(hull.EI))
+    peel = (24.0 * EI * max(lead, 1e-9) / q) ** 0.25
+    stretch = hull.length / max(plant.arrays.ng, 1)
+    ok = bool(peel <= stretch)
+    msg = (f"a stage {lead:.2f} m ahead of the next (its {c.sequence.delay_s:g} s start) bends the "
+           f"structure over ~{peel:,.0f} m (l = (24 EI h / q)^1/4), "
+           f"{'within' if ok else 'longer than'} a stage's {stretch:,.0f} m of it")
+    if not ok:
+        msg += ("; too stiff to peel in these stages: it pivots on the held stretch and whips "
+                "when that lets go; lift it at once (no control.sequence) or in fewer, longer "
+                "stages")
+    return Check("sequence", ok, msg)
 
 
 def balance_check(plant) -> Check:

@@ -173,7 +173,8 @@ def seabed_profile(plant, snaps: dict) -> dict:
     clearance (5 cm) of the seabed. Returns ``grounded_from``, ``grounded_to`` (nt,) [m]: the
     aft-most and forward-most grounded points (the touchdown points of a structure peeled
     from one end; nan when nothing is grounded), ``grounded_length`` (nt,) [m], and the slope
-    dw/dx of the retained modes on the strength grid: ``x`` (nx,) [m], ``slope`` (nt, nx) [rad]."""
+    of the retained modes on the strength grid as an angle, arctan(dw/dx): ``x`` (nx,) [m],
+    ``slope`` (nt, nx) [rad]."""
     from flexlift.ascent.plant import slope_at
 
     a = plant.arrays
@@ -185,6 +186,6 @@ def seabed_profile(plant, snaps: dict) -> dict:
     last = np.where(any_, xs[xs.size - 1 - np.argmax(grounded[:, ::-1], axis=1)], np.nan)
     x, _, keep = strength_grid(plant)
     x = x[keep]
-    slope = snaps["q"] @ slope_at(plant.modes, x)[:, : a.nr].T
+    slope = np.arctan(snaps["q"] @ slope_at(plant.modes, x)[:, : a.nr].T)  # the angle
     return {"grounded_from": first, "grounded_to": last,
             "grounded_length": grounded @ a.strip_weight, "x": x, "slope": slope}
