@@ -27,6 +27,7 @@ from flexlift.control.profile import speed_limit
 from flexlift.control.reference import trapezoid
 from flexlift.control.sequence import start_times
 from flexlift.errors import InputError
+from flexlift.loads.statics import suspended_length
 from flexlift.physics import seabed
 
 
@@ -90,7 +91,7 @@ def sequence_check(scenario, plant) -> Check:
                      c.ascent_acceleration_m_s2)[0]
     q = plant.wet_weight / hull.length
     EI = float(np.median(hull.EI))
-    peel = (24.0 * EI * max(lead, 1e-9) / q) ** 0.25
+    peel = suspended_length(EI, q, max(lead, 1e-9))
     stretch = hull.length / max(plant.arrays.ng, 1)
     ok = bool(peel <= stretch)
     msg = (f"a stage {lead:.2f} m ahead of the next (its {c.sequence.delay_s:g} s start) bends the "

@@ -35,11 +35,16 @@ from flexlift.structure.hull import Hull
 
 #: lifts within this fraction of the wet weight carry it all: the structure floats
 FLOAT_TOLERANCE = 1e-6
-#: the small-deflection beam's validity: slopes beyond this are warned about [deg]
-SLOPE_LIMIT_DEG = 10.0
 MAX_ITERATIONS = 500
 #: a free span lower than this between two contacts is the seabed springs' ripple [m]
 TOUCH_TOLERANCE_M = 1e-3
+
+
+def suspended_length(EI: float, q: float, h: float) -> float:
+    """Length [m] a long heavy beam lifted off a rigid seabed at one end to a height ``h`` [m]
+    hangs free over (SPEC §9.1, small slopes): l = (24 EI h / q)^(1/4), EI [N m^2], q its wet
+    weight per length [N/m]; the lifting force is q l / 2 and the largest moment q l^2 / 8."""
+    return (24.0 * EI * h / q) ** 0.25
 
 
 @dataclass(frozen=True)
@@ -107,10 +112,12 @@ def bag_vector(hull: Hull, plan, lifts: dict) -> np.ndarray:
 
 
 def solve(hull: Hull, plan, lifts: dict, stiffness: float, q_el: np.ndarray,
-          point_weights: np.ndarray, Z: np.ndarray, allowable: float) -> Statics:
+          point_weights: np.ndarray, Z: np.ndarray, allowable: float,
+          slope_validity_deg: float = 10.0) -> Statics:
     """The static state of ``hull`` under bag ``lifts`` [N by name] on a seabed of spring
     ``stiffness`` [N/m per m]; ``q_el`` wet weight per element [N/m], ``point_weights`` [N]
-    per node, ``Z`` section modulus per element [m^3], ``allowable`` stress [Pa]."""
+    per node, ``Z`` section modulus per element [m^3], ``allowable`` stress [Pa]; slopes
+    beyond ``slope_validity_deg`` (the small-deflection beam's validity) are warned about."""
     n_nodes = hull.n_nodes
     K = assemble(hull).K.tocsc()
     f = weight_vector(hull, q_el, point_weights) + bag_vector(hull, plan, lifts)
@@ -133,7 +140,8 @@ def solve(hull: Hull, plan, lifts: dict, stiffness: float, q_el: np.ndarray,
     return Statics(x=hull.x_nodes, w=w, slope=th, contact=active, reaction=reaction, moment=M,
                    utilisation=util, lifts=dict(lifts), net_force=net,
                    floating=not active.any(), iterations=iterations,
-                   warnings=tuple(_warnings(hull, th, net, wet, plan.gravity)))
+                   warnings=tuple(_warnings(hull, th, net, wet, plan.gravity,
+                                            slope_validity_deg)))
 
 
 def _active_set(K, f, k_node) -> tuple[np.ndarray, np.ndarray, int]:
@@ -204,30 +212,19 @@ def _moment(hull, q_el, point_weights, plan, lifts, reaction, accel) -> np.ndarr
     return np.r_[M[0::2], M[-1]]
 
 
-def _warnings(hull, th, net, wet, g) -> list[str]:
+def _warnings(hull, th, net, wet, g, limit_deg) -> list[str]:
     out = []
     slope = np.degrees(np.arctan(np.abs(th)))
-    over = slope > SLOPE_LIMIT_DEG
+    over = slope > limit_deg
     if over.any():
         xs = hull.x_nodes[over]
         out.append(f"slope up to {slope.max():.1f} deg at x = {xs.min():.1f}..{xs.max():.1f} m "
-                   f"exceeds the small-deflection beam's validity ({SLOPE_LIMIT_DEG:g} deg)")
+                   f"exceeds the small-deflection beam's validity ({limit_deg:g} deg, "
+                   "limits.slope_validity_deg)")
     if net > FLOAT_TOLERANCE * wet:
         out.append(f"the lifts exceed the wet weight by {net / (1e3 * g):.1f} t: the structure "
                    "rises (no static equilibrium); shown is its shape hanging in the bags")
     return out
-
-
-def slope_limit_warning(x: np.ndarray, slope_deg: np.ndarray, t: float | None = None) -> str | None:
-    """The small-slope validity warning for slopes ``slope_deg`` [deg] at ``x`` [m] (at time
-    ``t`` [s] when given), or None below :data:`SLOPE_LIMIT_DEG`."""
-    over = np.abs(slope_deg) > SLOPE_LIMIT_DEG
-    if not over.any():
-        return None
-    when = "" if t is None else f" at t = {t:.0f} s"
-    return (f"slope up to {np.abs(slope_deg).max():.1f} deg{when} at x = "
-            f"{x[over].min():.1f}..{x[over].max():.1f} m exceeds the small-deflection beam's "
-            f"validity ({SLOPE_LIMIT_DEG:g} deg)")
 
 
 def scenario_statics(scenario, lifts_t: dict | None = None, hull: Hull | None = None,
@@ -260,7 +257,7 @@ def scenario_statics(scenario, lifts_t: dict | None = None, hull: Hull | None = 
     k = scenario.seabed.contact_stiffness_N_m2 if stiffness is None else stiffness
     return solve(hull, plan, lifts, k, hull.wet_weight_per_length(g, rho, rho_s),
                  hull.point_wet_weights(g, rho, rho_s), Z,
-                 scenario.hull.allowable_stress_MPa * 1e6)
+                 scenario.hull.allowable_stress_MPa * 1e6, scenario.limits.slope_validity_deg)
 
 
 def _names(lifts: dict) -> str:
