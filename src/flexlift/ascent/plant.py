@@ -252,14 +252,8 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     H0 = (scenario.lift.breakout_factor - 1.0) * plan.wet_weight
     strip_group, bag_group, ng = holding_groups(scenario, [b.name for b in bags], x_point,
                                                 external, xs)
-    W_g, frac = np.array([plan.wet_weight]), np.ones(1)
-    if ng > 1:  # each stretch's share of the weight (its point masses too) and of the suction
-        node_group = strip_group[np.clip(np.searchsorted(xs, hull.x_nodes), 0, xs.size - 1)]
-        W_g = (np.bincount(strip_group, ws * wet_line, ng)
-               + np.bincount(node_group, hull.point_wet_weights(g, rho, rho_s), ng))
-        W_g *= plan.wet_weight / W_g.sum()  # the plan's W' exactly, shared as the loads lie
-        frac = np.bincount(strip_group, ws * shape, ng)
-        frac /= frac.sum()
+    W_g, frac = stretch_shares(strip_group, ng, xs, ws * wet_line, ws * shape, hull,
+                               hull.point_wet_weights(g, rho, rho_s), plan.wet_weight)
     hold_s = shape / frac[strip_group]  # per unit H of the strip's own group
     ns = xs.size
     cs, cb, cw = static_correction(psi_p[:, nr:], modes.omega[nr:] ** 2, strip_gen[nr:],
@@ -342,6 +336,20 @@ def neutral_volumes(external: np.ndarray, capacity: np.ndarray, wet_weight, rho_
         if ext.any():
             V = np.where(ext, (W[g] / rho_g - V[groups == g].sum()) / ext.sum(), V)
     return V
+
+
+def stretch_shares(strip_group, ng: int, xs, strip_weight, strip_hold, hull: Hull,
+                   point_weights, wet_weight: float):
+    """(wet weight W_g [N], share of the suction [-]) of each of the ``ng`` holding stretches:
+    ``strip_weight`` [N] and ``strip_hold`` [-] the strips' wet weight and holding shape times
+    their quadrature weights, ``point_weights`` [N] at the hull's nodes (to the stretch of the
+    nearest strip); W_g scaled to the plan's ``wet_weight`` exactly. One stretch: everything."""
+    if ng == 1:
+        return np.array([wet_weight]), np.ones(1)
+    node_group = strip_group[np.clip(np.searchsorted(xs, hull.x_nodes), 0, xs.size - 1)]
+    W_g = np.bincount(strip_group, strip_weight, ng) + np.bincount(node_group, point_weights, ng)
+    frac = np.bincount(strip_group, strip_hold, ng)
+    return W_g * (wet_weight / W_g.sum()), frac / frac.sum()
 
 
 def holding_groups(scenario, names, x_point, external, xs):
