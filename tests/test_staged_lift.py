@@ -237,3 +237,11 @@ def test_slopes_are_angles_even_when_the_run_goes_wrong(tanker):
     r = simulate(ship, control="decentralized")
     assert not r.criteria["pitch"] and r.warnings
     assert 10.0 < r.headline["max_slope_deg"] <= 90.0
+
+
+def test_retained_modes_text_other_than_auto_is_one_line(tmp_path, capsys):
+    path = tmp_path / "s.yaml"
+    path.write_text("simulation:\n  retained_flexible_modes: many\n")
+    assert main(["loads", str(path)]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert "simulation.retained_flexible_modes" in err and "or auto" in err

@@ -428,6 +428,14 @@ class Simulation(_Section):
     output_interval_s: Duration = 1.0
     strength_interval_s: Duration = 10.0  # time spacing of stored shear/moment distributions
 
+    @field_validator("retained_flexible_modes", mode="before")
+    @classmethod
+    def _auto_or_number(cls, v):
+        if isinstance(v, str) and v != "auto":
+            raise ValueError("a whole number of modes (0..1000) or auto (one per lift-point "
+                             "interval)")
+        return v
+
     @model_validator(mode="after")
     def _check(self) -> Simulation:
         steps = self.duration_s / self.time_step_s
