@@ -432,8 +432,8 @@ class Simulation(_Section):
     @classmethod
     def _auto_or_number(cls, v):
         if isinstance(v, str) and v != "auto":
-            raise ValueError("not text: a whole number of modes (0..1000, without quotes) or "
-                             "auto (one per lift-point interval)")
+            raise ValueError("a number is needed here, not text (write it without quotes), "
+                             "or auto (one flexible mode per lift-point interval)")
         return v
 
     @model_validator(mode="after")
