@@ -376,21 +376,68 @@ def test_a_failed_figure_process_is_an_error_at_the_end(tmp_path):
 
 
 def test_an_interrupt_kills_the_figure_processes(tmp_path):
-    import os
-
     from flexlift.output.plots import _style
 
-    pids = []
+    workers = []
     with pytest.raises(KeyboardInterrupt):
         with _style.figures_in_background(2):
             for k in range(2):
                 _style.draw(tmp_path / f"{k}.png", _plain_plot)
-            pids = list(_style._BACKGROUND.running)
+            workers = list(_style._BACKGROUND.workers)
             raise KeyboardInterrupt
-    assert len(pids) == 2 and _style._BACKGROUND is None
-    for pid in pids:  # killed and reaped: no such child any more
-        with pytest.raises(ChildProcessError):
-            os.waitpid(pid, os.WNOHANG)
+    assert len(workers) == 2 and _style._BACKGROUND is None
+    for p in workers:  # stopped and reaped
+        assert not p.is_alive() and p.exitcode is not None
+
+
+def _dying_plot():
+    import os
+
+    os._exit(3)  # a figure process killed (out of memory, say)
+
+
+def test_a_figure_process_that_dies_is_an_error_naming_its_figure(tmp_path):
+    from flexlift.output.plots import _style
+
+    with pytest.raises(_style.FigureError, match="dead.png"):
+        with _style.figures_in_background(2):
+            _style.draw(tmp_path / "dead.png", _dying_plot)
+    assert _style._BACKGROUND is None and not (tmp_path / "dead.png").exists()
+
+
+def test_a_figure_whose_data_do_not_pickle_is_drawn_here(tmp_path):
+    """A figure process gets the plot function and its data by pickle; what does not pickle
+    (a local function here) is drawn by the main process, the same file."""
+    import threading
+
+    from flexlift.output.plots import _style
+
+    def local_plot(lock):  # neither the function nor a lock pickles
+        return _plain_plot()
+
+    with _style.figures_in_background(2):
+        _style.draw(tmp_path / "here.png", local_plot, threading.Lock())
+        _style.draw(tmp_path / "there.png", _plain_plot)
+    assert (tmp_path / "here.png").read_bytes() == (tmp_path / "there.png").read_bytes()
+
+
+def _plot_recording_niceness(record):
+    import os
+
+    record.write_text(str(os.nice(0)))
+    return _plain_plot()
+
+
+def test_the_figure_processes_have_a_lower_priority(tmp_path):
+    import os
+
+    from flexlift.output.plots import _style
+
+    with _style.figures_in_background(1):
+        _style.draw(tmp_path / "nice.png", _plot_recording_niceness, tmp_path / "nice.txt")
+    expected = min(os.nice(0) + _style.WORKER_NICENESS, 19)
+    assert int((tmp_path / "nice.txt").read_text()) == expected
+    assert os.nice(0) < expected  # this process is not lowered
 
 
 @pytest.mark.parametrize("text, n", [("", 2), ("0", 0), ("3", 3), ("-2", 0), ("many", 2)])

@@ -328,6 +328,12 @@ class FIS:
         return make_surface(self, grid, refine)
 
     # ---------------------------------------------------------------- internals
+    def __getstate__(self) -> dict:
+        """Pickled (to a figure process, say) without what it derives and caches: the
+        compiled evaluators hold local functions, which do not pickle."""
+        derived = ("_compiled", "_single_point", "output_grids")
+        return {k: v for k, v in self.__dict__.items() if k not in derived}
+
     @cached_property
     def _compiled(self):
         return compile_fis(self)

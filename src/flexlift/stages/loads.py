@@ -182,21 +182,21 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
                            f"{s_['allowable_MPa']:g} MPa)", s_["max_utilisation"], "-", s_["x_m"], None])
     figures: list[Figure] = []
     if out is not None:
-        from flexlift.output.plots._style import save
+        from flexlift.output.plots._style import draw
         from flexlift.output.plots.loads import load_diagram, shear_moment_figure
 
         out = Path(out)
         fdir, tdir = out / "figures", out / "tables"
         figures.append(
             Figure(
-                save(load_diagram(hull, plan, case), fdir / "loads_diagram.png"),
+                draw(fdir / "loads_diagram.png", load_diagram, hull, plan, case),
                 "Lift plan: external bags at their nodes, internal bags over their spans, "
                 "weight plus breakout as a distributed downward load.",
             )
         )
         figures.append(
             Figure(
-                save(shear_moment_figure(st, hull, plan), fdir / "loads_shear_moment.png"),
+                draw(fdir / "loads_shear_moment.png", shear_moment_figure, st, hull, plan),
                 "Shear force and bending moment along the hull with the bags at full lift; "
                 "maxima marked, sagging positive.",
             )
