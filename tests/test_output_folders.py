@@ -230,8 +230,8 @@ def test_permissions_are_for_archiving_not_private(tmp_path):
         assert stat.S_IMODE(p.stat().st_mode) == want, p
 
 
-def _start(out: Path, tmp_path: Path) -> subprocess.Popen:
-    env = dict(os.environ, MPLBACKEND="Agg")
+def _start(out: Path, tmp_path: Path, figure_processes: str = "") -> subprocess.Popen:
+    env = dict(os.environ, MPLBACKEND="Agg", FLEXLIFT_FIGURE_PROCESSES=figure_processes)
     return subprocess.Popen([sys.executable, "-m", "flexlift", "run", "--out", str(out), "--quiet"],
                             cwd=tmp_path, env=env, stderr=subprocess.PIPE, text=True)
 
@@ -244,13 +244,26 @@ def _wait_for_partial(tmp_path: Path, name: str, proc: subprocess.Popen) -> None
     time.sleep(0.5)  # let it write a little
 
 
+def _wait_for_a_figure(tmp_path: Path, proc: subprocess.Popen) -> None:
+    """Until the run's partial folder holds a figure (the figure processes are running)."""
+    t0 = time.monotonic()
+    while not any(tmp_path.glob(f".o{PARTIAL}*/figures/*.png")):
+        assert proc.poll() is None and time.monotonic() - t0 < 60, "no figure drawn"
+        time.sleep(0.05)
+
+
+@pytest.mark.parametrize("figure_processes", ["0", "2"])
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
-def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, tmp_path):
+def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, figure_processes,
+                                                               tmp_path):
+    """Killed while it draws (in the main process, or with two figure processes: none of
+    them is left behind holding the run's output pipe, or writing into its folder)."""
     out = tmp_path / "o"
     with output_folder(out, "run") as tmp:
         (tmp / "previous.txt").write_text("v1")
-    proc = _start(out, tmp_path)
+    proc = _start(out, tmp_path, figure_processes)
     _wait_for_partial(tmp_path, "o", proc)
+    _wait_for_a_figure(tmp_path, proc)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
     assert (out / "previous.txt").read_text() == "v1"

@@ -329,8 +329,8 @@ class FIS:
 
     # ---------------------------------------------------------------- internals
     def __getstate__(self) -> dict:
-        """Pickled (to a figure process, say) without what it derives and caches: the
-        compiled evaluators hold local functions, which do not pickle."""
+        """Pickled (to a figure process, say) without what it derives and caches, rebuilt
+        on demand: the fast one-point evaluator is a local function, which does not pickle."""
         derived = ("_compiled", "_single_point", "output_grids")
         return {k: v for k, v in self.__dict__.items() if k not in derived}
 

@@ -263,12 +263,41 @@ class FigureError(RuntimeError):
 WORKER_NICENESS = 10
 
 
-def _worker_start() -> None:
-    """A figure process's start: Ctrl-C is the parent's to handle (it stops the figure
-    processes), SIGTERM ends it, it runs at a lower priority (:data:`WORKER_NICENESS`), its
-    figures are drawn here (not handed on), and its collector leaves the inherited heap
-    alone (no pages copied for it)."""
+def _end_with_parent(parent: int) -> None:
+    """Make this figure process end when its parent does, even killed (SIGKILL, out of
+    memory): a worker waiting for its next figure would otherwise wait for ever, and an
+    orphan could still write into a partial output folder. Linux: the kernel's
+    parent-death signal; elsewhere a thread that polls the parent's id."""
+    import threading
+
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0:  # PR_SET_PDEATHSIG
+            if os.getppid() != parent:  # died before the signal was set
+                os._exit(1)
+            return
+    except (OSError, AttributeError):
+        pass
+
+    def watch():
+        import time
+
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _worker_start(parent: int) -> None:
+    """A figure process's start: it ends with its parent (:func:`_end_with_parent`), Ctrl-C
+    is the parent's to handle (it stops the figure processes), SIGTERM ends it, it runs at a
+    lower priority (:data:`WORKER_NICENESS`), its figures are drawn here (not handed on), and
+    its collector leaves the inherited heap alone (no pages copied for it)."""
     global _BACKGROUND
+    _end_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the parent's handler
     with contextlib.suppress(OSError):
@@ -277,10 +306,13 @@ def _worker_start() -> None:
     gc.freeze()
 
 
-def _worker_draw(plot, args, kwargs, path: Path) -> str | None:
-    """In a figure process: draw ``plot(*args, **kwargs)`` into ``path``; None, or on failure
-    the file's name (the traceback printed to stderr)."""
+def _worker_draw(job: bytes, path: Path) -> str | None:
+    """In a figure process: draw the pickled ``(plot, args, kwargs)`` into ``path``; None, or
+    on failure the file's name (the traceback printed to stderr)."""
+    import pickle
+
     try:
+        plot, args, kwargs = pickle.loads(job)
         save(plot(*args, **kwargs), path)
         return None
     except Exception:
@@ -289,52 +321,73 @@ def _worker_draw(plot, args, kwargs, path: Path) -> str | None:
         return path.name
 
 
+def _draw_here(plot, args, kwargs, path: Path, why: str) -> None:
+    """Draw a figure in this process instead of a figure process (``why``: the reason, for
+    the debug log): its data do not pickle, or the figure processes are gone."""
+    import logging
+
+    logging.getLogger(__name__).debug("%s drawn in the main process: %s", path.name, why)
+    save(plot(*args, **kwargs), path)
+
+
 class _Background:
     """``n`` figure processes forked once, at the first figure (a
     :class:`concurrent.futures.ProcessPoolExecutor` of the ``fork`` context: they start with
-    this process's imports), each drawing one figure at a time, its plot function and data
-    pickled to it. (A process forked per figure, at most two at a time, cost this process
-    ~40 ms a fork, and it waited for a free one: 3.6 s of a 7.5 s run of the tanker.)"""
+    this process's imports), each drawing one figure at a time. A figure's plot function and
+    data are pickled when it is handed over (so it shows the data as they were then); what
+    does not pickle is drawn here at once. If a figure process dies (killed, out of memory),
+    the figures it had not finished are drawn here at the end. (A process forked per figure,
+    at most two at a time, cost this process ~40 ms a fork, and it waited for a free one.)"""
 
     def __init__(self, n: int):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
+        self._before = set(multiprocessing.active_children())
         self.pool = ProcessPoolExecutor(n, multiprocessing.get_context("fork"),
-                                        initializer=_worker_start)
+                                        initializer=_worker_start, initargs=(os.getpid(),))
         self.pending: list[tuple] = []  # (future, plot, args, kwargs, path)
-        #: the figure processes, once started
-        self.workers: list = []
 
-    def submit(self, plot, args, kwargs, path: Path) -> None:
-        """Queue ``plot(*args, **kwargs)`` into ``path`` for the next free figure process."""
+    @property
+    def workers(self) -> list:
+        """The figure processes started so far (:class:`multiprocessing.Process`)."""
         import multiprocessing
 
-        first = not self.pending
-        if first:
-            before = set(multiprocessing.active_children())
+        return [p for p in multiprocessing.active_children() if p not in self._before]
+
+    def submit(self, plot, args, kwargs, path: Path) -> None:
+        """Hand ``plot(*args, **kwargs)`` into ``path`` to the next free figure process."""
+        import pickle
+        from concurrent.futures.process import BrokenProcessPool
+
+        try:
+            job = pickle.dumps((plot, args, kwargs), protocol=pickle.HIGHEST_PROTOCOL)
+        except (pickle.PicklingError, TypeError, AttributeError) as exc:
+            _draw_here(plot, args, kwargs, path, f"its data do not pickle ({exc})")
+            return
+        if not self.pending:
             sys.stdout.flush()
             sys.stderr.flush()  # the children must not write the pending output again
-        with warnings.catch_warnings():  # Python >= 3.12 warns of BLAS's idle threads
-            warnings.simplefilter("ignore", DeprecationWarning)
-            future = self.pool.submit(_worker_draw, plot, args, kwargs, path)
-        if first:
-            self.workers = [p for p in multiprocessing.active_children() if p not in before]
+        try:
+            with warnings.catch_warnings():  # Python >= 3.12 warns of BLAS's idle threads
+                warnings.simplefilter("ignore", DeprecationWarning)
+                future = self.pool.submit(_worker_draw, job, path)
+        except BrokenProcessPool:
+            _draw_here(plot, args, kwargs, path, "a figure process died")
+            return
         self.pending.append((future, plot, args, kwargs, path))
 
     def finish(self) -> None:
-        """Wait for every queued figure; :class:`FigureError` naming those that failed. A
-        figure whose data cannot be pickled is drawn here instead."""
+        """Wait for every figure handed over; :class:`FigureError` naming those that failed.
+        The figures a dead figure process left are drawn here."""
         from concurrent.futures.process import BrokenProcessPool
 
         failed = []
         for future, plot, args, kwargs, path in self.pending:
             try:
                 name = future.result()
-            except BrokenProcessPool:  # a figure process died (killed, out of memory)
-                name = path.name
-            except Exception:  # not sent: its data do not pickle
-                save(plot(*args, **kwargs), path)
+            except BrokenProcessPool:
+                _draw_here(plot, args, kwargs, path, "a figure process died")
                 name = None
             if name:
                 failed.append(name)
@@ -344,11 +397,12 @@ class _Background:
                               f"above; {PROCESSES_ENV}=0 draws in the main process)")
 
     def abort(self) -> None:
-        """Stop the figure processes at once (queued figures are not drawn)."""
+        """Stop the figure processes at once (the figures not yet drawn are not)."""
+        workers = self.workers
         self.pool.shutdown(wait=False, cancel_futures=True)
-        for p in self.workers:
+        for p in workers:
             p.kill()
-        for p in self.workers:
+        for p in workers:
             p.join()
 
 
@@ -394,9 +448,11 @@ def _warm_up() -> None:
 @contextlib.contextmanager
 def figures_in_background(processes: int | None = None):
     """Within the block, :func:`draw` hands each figure to ``processes`` figure processes
-    (default :func:`figure_processes`; 0, or already inside such a block: drawn in this
-    process). Leaving the block waits for every figure and raises :class:`FigureError` if
-    one failed; an exception in the block stops the figure processes before it propagates."""
+    (default :func:`figure_processes`; 0: drawn in this process). Leaving the block waits
+    for every figure and raises :class:`FigureError` if one failed; an exception in the
+    block stops the figure processes before it propagates. Inside another such block this
+    one adds nothing: its figures go to the outer block's processes and are complete when
+    that block ends."""
     global _BACKGROUND
     n = figure_processes() if processes is None else int(processes)
     if n <= 0 or _BACKGROUND is not None or not hasattr(os, "fork"):
