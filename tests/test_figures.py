@@ -375,19 +375,45 @@ def test_a_failed_figure_process_is_an_error_at_the_end(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["good.png", "plain.png"]
 
 
+def _slow_plot():
+    import time
+
+    time.sleep(60)
+    return _plain_plot()
+
+
 def test_an_interrupt_kills_the_figure_processes(tmp_path):
+    """Ctrl-C while both figure processes draw (a minute each): they are killed at once,
+    not waited for, and their figures are not written."""
+    import time
+
     from flexlift.output.plots import _style
 
     workers = []
     with pytest.raises(KeyboardInterrupt):
         with _style.figures_in_background(2):
             for k in range(2):
-                _style.draw(tmp_path / f"{k}.png", _plain_plot)
+                _style.draw(tmp_path / f"{k}.png", _slow_plot)
+            time.sleep(0.5)
             workers = list(_style._BACKGROUND.workers)
+            t0 = time.monotonic()
             raise KeyboardInterrupt
+    assert time.monotonic() - t0 < 30.0
     assert len(workers) == 2 and _style._BACKGROUND is None
-    for p in workers:  # stopped and reaped
-        assert not p.is_alive() and p.exitcode is not None
+    assert list(tmp_path.iterdir()) == []
+    for p in workers:  # stopped and reaped: no such process any more, not even a zombie
+        assert _gone(p.pid)
+
+
+def _gone(pid: int) -> bool:
+    """Whether no process ``pid`` exists (reaped, not a zombie)."""
+    import os
+
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
 
 
 def _dying_plot(parent):

@@ -397,13 +397,11 @@ class _Background:
                               f"above; {PROCESSES_ENV}=0 draws in the main process)")
 
     def abort(self) -> None:
-        """Stop the figure processes at once (the figures not yet drawn are not)."""
-        workers = self.workers
-        self.pool.shutdown(wait=False, cancel_futures=True)
-        for p in workers:
+        """Stop the figure processes at once (the figures not yet drawn are not): killed, then
+        reaped by the pool's own shutdown (joining them here as well raced with it)."""
+        for p in self.workers:
             p.kill()
-        for p in workers:
-            p.join()
+        self.pool.shutdown(wait=True, cancel_futures=True)
 
 
 _BACKGROUND: _Background | None = None
@@ -422,12 +420,12 @@ def _warm_up() -> None:
     the figures use, their glyphs, a log axis's labels, the 3D axes and the contouring
     imported (each figure process would otherwise do all of this again)."""
     global _WARM
+    if _WARM:
+        return
     import io
 
     import mpl_toolkits.mplot3d  # noqa: F401 (the fuzzy stage's surface)
 
-    if _WARM:
-        return
     fig, ax = new_figure()
     ax.semilogy([1.0, 2.0], [1e-3, 1e3], label="x")
     ax.contourf([[0.0, 1.0], [1.0, 2.0]], levels=3)
