@@ -22,16 +22,22 @@ def _write(tmp_path, text: str):
         ("hull:\n  displacement_t: -3\n", "modes", "hull.displacement_t"),
         ("lift:\n  layout: mode_nodes\n  layout_flexible_mode: 40\n", "loads", "layout_flexible_mode"),
         ("hull: [1, 2\n", "run", "malformed YAML"),
+        ("control:\n  sequence: {groups: [[Z9]]}\n", "simulate",
+         ("control.sequence.groups[0][0]: got 'Z9'", "its bags are bag_1")),
+        ("simulation:\n  retained_flexible_modes: many\n", "loads",
+         ("simulation.retained_flexible_modes", "or auto")),
     ],
 )
 def test_one_line_exit_2(tmp_path, capsys, yaml_text, command, needle):
+    """``needle``: a text the line holds, or a tuple of them."""
     path = _write(tmp_path, yaml_text)
     args = [command, path] + (["--out", str(tmp_path / "o"), "--quiet"] if command == "run" else [])
     assert main(args) == 2
     err = capsys.readouterr().err
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
-    assert needle in lines[0] and "Traceback" not in err
+    needles = (needle,) if isinstance(needle, str) else needle
+    assert all(n in lines[0] for n in needles) and "Traceback" not in err
     assert not (tmp_path / "o").exists()
 
 

@@ -8,7 +8,6 @@ from flexlift.ascent import simulate
 from flexlift.ascent.checks import breakout_check
 from flexlift.ascent.mechanics import contact_matrices, update_contact_matrices
 from flexlift.ascent.plant import coupled_plant, retained_flexible
-from flexlift.cli import main
 from flexlift.control.build import controller_for, fuzzy_maps
 from flexlift.control.controller import sample
 from flexlift.control.sequence import stage_groups, start_times
@@ -61,15 +60,6 @@ def test_an_internal_bag_in_a_sequence_is_refused(tanker):
     sc = tanker.with_changes(**{"control.sequence": {"groups": [names]}})
     with pytest.raises(InputError, match="an internal bag"):
         coupled_plant(sc)
-
-
-def test_bad_sequence_through_the_cli_is_one_line(tmp_path, capsys):
-    path = tmp_path / "s.yaml"
-    path.write_text("control:\n  sequence: {groups: [[Z9]]}\n")
-    assert main(["simulate", str(path)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "control.sequence.groups[0][0]: got 'Z9'" in err[0]
-    assert "its bags are bag_1" in err[0]
 
 
 # ------------------------------------------------------------------------- the plant
@@ -237,11 +227,3 @@ def test_slopes_are_angles_even_when_the_run_goes_wrong(tanker):
     r = simulate(ship, control="decentralized")
     assert not r.criteria["pitch"] and r.warnings
     assert 10.0 < r.headline["max_slope_deg"] <= 90.0
-
-
-def test_retained_modes_text_other_than_auto_is_one_line(tmp_path, capsys):
-    path = tmp_path / "s.yaml"
-    path.write_text("simulation:\n  retained_flexible_modes: many\n")
-    assert main(["loads", str(path)]) == 2
-    (err,) = capsys.readouterr().err.strip().splitlines()
-    assert "simulation.retained_flexible_modes" in err and "or auto" in err
