@@ -113,7 +113,7 @@ def bag_vector(hull: Hull, plan, lifts: dict) -> np.ndarray:
 
 def solve(hull: Hull, plan, lifts: dict, stiffness: float, q_el: np.ndarray,
           point_weights: np.ndarray, Z: np.ndarray, allowable: float,
-          slope_validity_deg: float = 10.0) -> Statics:
+          slope_validity_deg: float) -> Statics:
     """The static state of ``hull`` under bag ``lifts`` [N by name] on a seabed of spring
     ``stiffness`` [N/m per m]; ``q_el`` wet weight per element [N/m], ``point_weights`` [N]
     per node, ``Z`` section modulus per element [m^3], ``allowable`` stress [Pa]; slopes
