@@ -123,7 +123,7 @@ def test_a_write_error_is_one_line_and_the_previous_output_is_intact(tmp_path, c
     out = tmp_path / "o"
     assert main(["run", "--out", str(out), "--quiet", "--stages", "modes,loads"]) == 0
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
-    import flexlift.output.files as files
+    import flexlift.plumbing.atomic as files
 
     real = files.write_text
 
@@ -280,8 +280,8 @@ def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, figure_proce
 def test_an_incremental_folder_removes_only_its_own_unchanged_files(tmp_path):
     """remove_own (the sweep's stale rerun files): listed, a regular file, and holding what
     the command wrote; an edited file, a link in its place or an unlisted file stays."""
-    from flexlift.output.files import write_text
     from flexlift.output.folders import incremental_folder
+    from flexlift.plumbing.atomic import write_text
 
     out = tmp_path / "o"
     with incremental_folder(out, "sweep", "id-1") as inc:

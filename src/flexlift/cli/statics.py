@@ -54,7 +54,7 @@ def _main(args) -> int:
     s = summary(st, g)
     with writing(args.out, "statics") as out:
         if out is not None:
-            from flexlift.output.files import write_json, write_text
+            from flexlift.plumbing.atomic import write_json, write_text
 
             rows = np.column_stack([st.x, st.w, np.degrees(st.slope), st.contact, st.reaction,
                                     st.moment / 1e6, st.utilisation])

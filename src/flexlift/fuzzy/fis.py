@@ -29,7 +29,7 @@ from pathlib import Path
 from flexlift.errors import InputError
 from flexlift.fuzzy.fis_parse import METHODS, parse_fis
 from flexlift.fuzzy.system import FIS, MF
-from flexlift.output.files import write_text
+from flexlift.plumbing.atomic import write_text
 
 ROLES = ("supervisor", "fill")
 

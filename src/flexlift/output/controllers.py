@@ -7,7 +7,7 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from flexlift.output.files import write_bytes
+from flexlift.plumbing.atomic import write_bytes
 
 #: the output folder's subfolder for the copies
 FOLDER = "controllers"

@@ -48,7 +48,7 @@ from pathlib import Path
 
 from flexlift import __version__
 from flexlift.errors import InputError
-from flexlift.output.files import dir_mode, file_mode, write_json
+from flexlift.plumbing.atomic import dir_mode, file_mode, write_json
 
 log = logging.getLogger(__name__)
 
@@ -257,7 +257,7 @@ def output_folder(target: str | os.PathLike, command: str = "run") -> Iterator[P
 
 
 # --------------------------------------------------------------------------- written in place
-#: hidden temporary file of :func:`flexlift.output.files.atomic_file` for the file NAME:
+#: hidden temporary file of :func:`flexlift.plumbing.atomic.atomic_file` for the file NAME:
 #: ``.NAME.<8 characters of mkstemp>`` and its suffix
 _TEMP_TAIL = re.compile(r"\.[a-z0-9_]{8}(\.[a-z0-9]{1,4})$")
 
@@ -267,7 +267,7 @@ MARKER_LISTING_MAX = 900_000
 
 
 def atomic_leftover(name: str) -> str | None:
-    """The name of the file an interrupted :func:`~flexlift.output.files.atomic_file` was
+    """The name of the file an interrupted :func:`~flexlift.plumbing.atomic.atomic_file` was
     writing, when ``name`` is one of its hidden temporary files; else None."""
     if not name.startswith("."):
         return None

@@ -18,7 +18,7 @@ __all__ = ["BAG_VARS", "CRITERIA", "HULL_VARS", "Result", "load_netcdf", "save_n
 
 def save_netcdf(result: Result, path) -> Path:
     """Write the dataset as netCDF 3 (scipy engine), atomically; returns the path."""
-    from flexlift.output.files import atomic_file
+    from flexlift.plumbing.atomic import atomic_file
 
     path = Path(path)
     ds = result.dataset.copy()
@@ -41,7 +41,7 @@ def load_netcdf(path) -> Result:
 def to_csv(result: Result, folder, prefix: str = "simulate") -> list[Path]:
     """Write the time histories (one column per variable and bag, units in the headers) and
     the strength envelopes as CSV under ``folder``; returns the paths."""
-    from flexlift.output.files import write_text
+    from flexlift.plumbing.atomic import write_text
 
     ds = result.dataset
     folder = Path(folder)

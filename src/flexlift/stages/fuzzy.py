@@ -12,8 +12,8 @@ from flexlift.control.build import fill_map_of, supervisor_fis_of
 from flexlift.errors import InputError
 from flexlift.fuzzy.fis import read_fis, to_fis_text
 from flexlift.fuzzy.system import FIS
-from flexlift.output.files import write_text
 from flexlift.output.stage import Figure, StageOutput, Table
+from flexlift.plumbing.atomic import write_text
 
 NAME = "fuzzy"
 SURFACE_GRID = 81  # the table the simulation may use instead of exact inference

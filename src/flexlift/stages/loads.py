@@ -15,8 +15,8 @@ from flexlift.ascent.plant import coupled_plant
 from flexlift.ascent.result import section_modulus
 from flexlift.loads.liftplan import LiftPlan, plan_lift
 from flexlift.loads.strength import Strength, balanced_case, lift_load_case, strength
-from flexlift.output.files import write_text
 from flexlift.output.stage import Figure, StageOutput, Table
+from flexlift.plumbing.atomic import write_text
 from flexlift.structure.hull import hull_from_scenario
 
 log = logging.getLogger(__name__)

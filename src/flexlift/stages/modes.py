@@ -15,9 +15,9 @@ import numpy as np
 
 from flexlift.ascent.plant import wet_beam
 from flexlift.errors import InputError
-from flexlift.output.files import write_text
 from flexlift.output.modenames import mode_label, mode_title
 from flexlift.output.stage import Figure, StageOutput, Table
+from flexlift.plumbing.atomic import write_text
 from flexlift.structure.beam import assemble
 from flexlift.structure.convergence import Convergence, convergence_study, is_uniform
 from flexlift.structure.hull import hull_from_scenario

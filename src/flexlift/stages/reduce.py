@@ -25,9 +25,9 @@ from flexlift.dynamics.statespace import (
     mode_gains,
 )
 from flexlift.loads.liftplan import plan_lift
-from flexlift.output.files import write_text
 from flexlift.output.modenames import labels_of_numbers, mode_list
 from flexlift.output.stage import Figure, StageOutput, Table
+from flexlift.plumbing.atomic import write_text
 from flexlift.structure.hull import hull_from_scenario
 from flexlift.structure.modes import compute_modes
 

@@ -176,7 +176,7 @@ def _lost(case: Case, exc: Exception) -> dict:
 
 # --------------------------------------------------------------------------- the results
 def _write_results(result: SweepResult, cases, names, folder) -> None:
-    from flexlift.output.files import atomic_file, write_json, write_text
+    from flexlift.plumbing.atomic import atomic_file, write_json, write_text
     from flexlift.sweep.report import render_report
 
     spec, records = result.spec, result.records
@@ -201,7 +201,7 @@ def _write_reruns(spec, cases, names, summary, folder) -> dict[int, str]:
     """The scenario files of the worst and the failed cases, ``rerun/case_NNNN.yaml``; those
     of an earlier run of this sweep that are no longer wanted are removed (only files the
     folder's marker lists as this sweep's)."""
-    from flexlift.output.files import write_text
+    from flexlift.plumbing.atomic import write_text
 
     wanted = set()
     for mode_worst in summary["worst"].values():

@@ -31,8 +31,8 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
-from flexlift.output.files import write_json
 from flexlift.output.folders import incremental_folder
+from flexlift.plumbing.atomic import write_json
 
 COMMAND = "sweep"
 #: a case's record, and its histories (one netCDF per control mode)
@@ -80,7 +80,7 @@ class SweepFolder:
         with incremental_folder(target, COMMAND, checksum, _Owns(checksum)) as inc:
             folder = cls(inc, checksum)
             inc.claim("spec.yaml", "base.yaml", "cases")
-            from flexlift.output.files import write_text
+            from flexlift.plumbing.atomic import write_text
 
             write_text(folder.path / "spec.yaml", spec.to_yaml())
             write_text(folder.path / "base.yaml", spec.base.to_yaml())

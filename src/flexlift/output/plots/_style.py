@@ -184,7 +184,7 @@ def _write(fig, path: Path) -> None:
     (else RGBA) at :data:`PNG_COMPRESS_LEVEL`, at the house ``savefig.dpi``."""
     from PIL import Image, PngImagePlugin
 
-    from flexlift.output.files import atomic_file
+    from flexlift.plumbing.atomic import atomic_file
 
     prepare(fig)
     with plt.rc_context(STYLE):

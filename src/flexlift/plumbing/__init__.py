@@ -1,0 +1,6 @@
+"""Plumbing every layer may use: files written atomically, files read within bounds, the
+output lock. The bottom floor of the package (like :mod:`flexlift._jit` for compiling): it
+imports nothing of flexlift but :mod:`flexlift.errors`, and every layer may import it.
+
+- :mod:`flexlift.plumbing.atomic`: a reader never sees a half-written file.
+"""
