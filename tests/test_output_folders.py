@@ -15,6 +15,8 @@ import pytest
 from flexlift.cli import main
 from flexlift.output import MARKER, OutputError, output_folder
 from flexlift.output.folders import OLD, PARTIAL, read_marker
+from flexlift.plumbing.atomic import write_text as _write
+from flexlift.plumbing.marker import JOURNAL
 
 
 def _one_line(capsys, needle: str) -> str:
@@ -144,7 +146,7 @@ def test_a_write_error_is_one_line_and_the_previous_output_is_intact(tmp_path, c
 def test_a_second_run_on_a_locked_folder_is_refused(tmp_path, capsys):
     out = tmp_path / "o"
     with output_folder(out, "run") as tmp:
-        (tmp / "x.txt").write_text("first run")
+        _write(tmp / "x.txt", "first run")
         assert main(["loads", "--out", str(out)]) == 2
         _one_line(capsys, "another flexlift run")
     assert (out / "x.txt").read_text() == "first run"
@@ -154,9 +156,9 @@ def test_a_second_run_on_a_locked_folder_is_refused(tmp_path, capsys):
 def test_an_exception_while_building_leaves_the_previous_output(tmp_path):
     out = tmp_path / "o"
     with output_folder(out, "run") as tmp:
-        (tmp / "a.txt").write_text("v1")
+        _write(tmp / "a.txt", "v1")
     with pytest.raises(KeyboardInterrupt), output_folder(out, "run") as tmp:
-        (tmp / "a.txt").write_text("v2")
+        _write(tmp / "a.txt", "v2")
         raise KeyboardInterrupt
     assert (out / "a.txt").read_text() == "v1"
     assert _litter(tmp_path) == []
@@ -167,6 +169,8 @@ def _leftover(parent: Path, name: str, kind: str, tag: str, complete: bool, cont
     d.mkdir()
     (d / "a.txt").write_text(content)
     files = ["a.txt"] if complete else []
+    if not complete:  # a killed run journaled the name before it created the file
+        (d / JOURNAL).write_text(json.dumps("a.txt") + "\n")
     (d / MARKER).write_text(json.dumps({"flexlift_output": 1, "run_id": tag, "complete": complete,
                                         "files": files}))
     return d
@@ -175,10 +179,10 @@ def _leftover(parent: Path, name: str, kind: str, tag: str, complete: bool, cont
 def test_recovery_after_a_kill_while_building(tmp_path, caplog):
     out = tmp_path / "o"
     with output_folder(out, "run") as tmp:
-        (tmp / "a.txt").write_text("v1")
+        _write(tmp / "a.txt", "v1")
     _leftover(tmp_path, "o", PARTIAL, "killed", complete=False, content="half")
     with output_folder(out, "run") as tmp:
-        (tmp / "a.txt").write_text("v2")
+        _write(tmp / "a.txt", "v2")
     assert (out / "a.txt").read_text() == "v2"
     assert _litter(tmp_path) == []
     assert any("removed 1 unfinished" in r.getMessage() for r in caplog.records)
@@ -192,7 +196,7 @@ def test_recovery_after_a_kill_inside_the_swap(tmp_path, caplog):
     with output_folder(tmp_path / "o", "run") as tmp:
         # the recovered folder is in place while the new run builds
         assert (tmp_path / "o" / "a.txt").read_text() == "v2"
-        (tmp / "a.txt").write_text("v3")
+        _write(tmp / "a.txt", "v3")
     assert (tmp_path / "o" / "a.txt").read_text() == "v3"
     assert _litter(tmp_path) == []
     assert any("finished the swap" in r.getMessage() for r in caplog.records)
@@ -213,7 +217,7 @@ def test_recovery_never_touches_hidden_folders_that_are_not_flexlifts(tmp_path):
     mine.mkdir()
     (mine / "keep.txt").write_text("x")
     with output_folder(tmp_path / "o", "run") as tmp:
-        (tmp / "a.txt").write_text("v1")
+        _write(tmp / "a.txt", "v1")
     assert (mine / "keep.txt").read_text() == "x"
 
 
@@ -260,7 +264,7 @@ def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, figure_proce
     them is left behind holding the run's output pipe, or writing into its folder)."""
     out = tmp_path / "o"
     with output_folder(out, "run") as tmp:
-        (tmp / "previous.txt").write_text("v1")
+        _write(tmp / "previous.txt", "v1")
     proc = _start(out, tmp_path, figure_processes)
     _wait_for_partial(tmp_path, "o", proc)
     _wait_for_a_figure(tmp_path, proc)
@@ -273,7 +277,7 @@ def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, figure_proce
     else:  # SIGKILL: nothing can run; the next run on that folder cleans up
         assert any(PARTIAL in n for n in _litter(tmp_path))
         with output_folder(out, "run") as tmp:
-            (tmp / "previous.txt").write_text("v2")
+            _write(tmp / "previous.txt", "v2")
         assert _litter(tmp_path) == []
 
 

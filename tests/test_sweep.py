@@ -15,6 +15,7 @@ import xarray as xr
 
 from flexlift.cli import main
 from flexlift.output.folders import read_marker
+from flexlift.plumbing.marker import JOURNAL
 from flexlift.sweep import load_spec, parse_spec, run_sweep
 from flexlift.sweep.cases import case_sequence, make_cases, uniforms
 from flexlift.sweep.executors import DaskEngine, Processes, Serial
@@ -473,11 +474,21 @@ def test_the_folder_is_flexlifts_own_and_a_rerun_knows_it(tmp_path, capsys):
     assert fake.read_text() == '{"case": 7}'
     fake.unlink()
     (out / "cases" / "case_0001.json").unlink()
-    # our own temporary leftover is removed; the rerun redoes the missing case only
-    (out / "cases" / ".case_0001.json.abcd_123.tmp").write_text("half")
+    # a user's file named like a temporary of ours, listed nowhere: refused, never deleted
+    look_alike = out / "cases" / ".case_0001.json.notes123.tmp"
+    look_alike.write_text("the user's")
+    assert main(["sweep", str(spec_file), "--out", str(out), "--workers", "1"]) == 2
+    one_line(capsys, ".case_0001.json.notes123.tmp", "did not write")
+    assert look_alike.read_text() == "the user's"
+    look_alike.unlink()
+    # our own temporary leftover (its name journaled before a killed write created it) is
+    # removed; the rerun redoes the missing case only
+    (out / "cases" / ".case_0001.json.abcd1234.tmp").write_text("half")
+    (out / JOURNAL).write_text(json.dumps("cases/.case_0001.json.abcd1234.tmp") + "\n")
     res = run_sweep(load_spec(spec_file), out, engine=Serial())
     assert res.ran == 1 and res.skipped == 1
-    assert not (out / "cases" / ".case_0001.json.abcd_123.tmp").exists()
+    assert not (out / "cases" / ".case_0001.json.abcd1234.tmp").exists()
+    assert not (out / JOURNAL).exists()
     # the SPEC as run resumes the same sweep
     assert run_sweep(load_spec(out / "spec.yaml"), out, engine=Serial()).skipped == 2
 

@@ -8,14 +8,19 @@ writes through :func:`output_folder`:
    files that marker lists. Anything else (a folder with the user's files, a file, a symbolic
    link, the current folder or one that holds it) is refused with one line naming the folder
    and the fix; nothing is touched.
-2. **Lock.** A lock file ``.NAME.lock`` beside the target (an ``flock``): a second run on the
-   same folder at the same time is refused, never a silent race.
+2. **Lock.** A lock file ``.NAME.lock`` beside the target, created new by this run and never
+   opened through a link (:mod:`flexlift.plumbing.lock`): a second run on the same folder at
+   the same time is refused, never a silent race; anything at that name that is not the
+   stale lock of a killed flexlift run is refused and left as it is.
 3. **Recover.** A run killed by SIGKILL (or a power cut) can leave hidden ``.NAME.partial-*``
    folders, or be killed inside the swap with the target missing and the previous output
    parked as ``.NAME.old-*``. The next run on that folder finishes or undoes such a swap and
-   removes the leftovers (each is flexlift's: it carries the marker), and says so.
+   removes the leftovers' files that their marker or journal lists
+   (:mod:`flexlift.plumbing.marker`: every name is journaled before it is created), and says
+   so; a file listed nowhere is left where it is, with a warning naming it.
 4. **Build aside.** The new output is written into a hidden sibling ``.NAME.partial-RUN``,
-   with the marker written first (so a leftover is recognisable as ours).
+   with the marker written first (so a leftover is recognisable as ours) and every name
+   journaled before it is created.
 5. **Swap.** When complete, the marker is finalised with the list of files written, the old
    folder is renamed aside, the new one renamed into place and the old one removed. A failure
    or interruption before that leaves the previous folder exactly as it was.
@@ -25,7 +30,7 @@ file per finished case) cannot be built aside and swapped in whole; it writes in
 :func:`incremental_folder` instead, under the same rules: the marker is written first
 (``complete: false``, with the command and an ``identity`` saying what is being built), a rerun
 with the same identity continues the folder, and nothing that is neither listed in the marker
-nor recognised by the command as its own (by its content) is ever touched.
+or its journal nor recognised by the command as its own (by its content) is ever touched.
 
 Folders get 0777 and files 0666 less the umask (0755 / 0644 usually), not the 0700 / 0600 of
 bare temporary files. Locking uses ``fcntl`` (Linux, macOS).
@@ -35,26 +40,35 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import fcntl
-import json
 import logging
 import os
 import re
 import secrets
-import shutil
+import stat
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from flexlift import __version__
 from flexlift.errors import InputError
 from flexlift.plumbing.atomic import dir_mode, file_mode, write_json
+from flexlift.plumbing.lock import held_lock
+from flexlift.plumbing.marker import (
+    JOURNAL,
+    MARKER,
+    Journal,
+    _real_parents,
+    journaled,
+    read_marker,
+    remove_listed,
+)
+from flexlift.plumbing.marker import _contents as _all_contents
+from flexlift.plumbing.marker import marker as _marker
 
 log = logging.getLogger(__name__)
 
-#: the marker file in every folder flexlift writes
-MARKER = ".flexlift-output"
-PARTIAL, OLD, LOCK = ".partial-", ".old-", ".lock"
+__all__ = ["MARKER", "OutputError", "incremental_folder", "output_folder", "read_marker"]
+
+PARTIAL, OLD = ".partial-", ".old-"
 
 
 class OutputError(InputError):
@@ -65,26 +79,9 @@ def _refuse(shown: str, why: str) -> OutputError:
     return OutputError("--out", shown, why)
 
 
-def read_marker(folder: Path) -> dict | None:
-    """The marker of ``folder`` as a dict, or None when it has none (or not a readable one)."""
-    p = folder / MARKER
-    try:
-        if not p.is_file() or p.is_symlink() or p.stat().st_size > 1_000_000:
-            return None
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) and data.get("flexlift_output") == 1 else None
-
-
 def _contents(folder: Path) -> set[str]:
-    """Every file and folder under ``folder``, as POSIX paths relative to it."""
-    out = set()
-    for root, dirs, files in os.walk(folder):
-        rel = Path(root).relative_to(folder)
-        for n in dirs + files:
-            out.add((rel / n).as_posix())
-    return out
+    """Every file and folder under ``folder`` but the journal (relative POSIX paths)."""
+    return _all_contents(folder) - {JOURNAL}
 
 
 def check_target(final: Path, shown: str) -> None:
@@ -115,36 +112,9 @@ def check_target(final: Path, shown: str) -> None:
                              f"{extra[0][:60]!r}); move them away or choose another folder")
 
 
-@contextlib.contextmanager
-def _locked(final: Path, shown: str) -> Iterator[None]:
-    """Hold the lock file ``.NAME.lock`` beside ``final`` (refuse if another run holds it)."""
-    path = final.parent / f".{final.name}{LOCK}"
-    for _ in range(20):  # retry if the file we opened was unlinked by its previous holder
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, file_mode())
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            pid = os.read(fd, 32).decode(errors="replace").strip() or "?"
-            os.close(fd)
-            raise _refuse(shown, f"another flexlift run (pid {pid}) is writing this folder; "
-                                 "wait for it to finish or choose another --out") from None
-        try:
-            same = os.fstat(fd).st_ino == os.stat(path).st_ino
-        except FileNotFoundError:
-            same = False
-        if same:
-            break
-        os.close(fd)
-    else:  # pragma: no cover - 20 lost races in a row
-        raise _refuse(shown, "could not be locked; try again")
-    try:
-        os.ftruncate(fd, 0)
-        os.write(fd, str(os.getpid()).encode())
-        yield
-    finally:
-        with contextlib.suppress(OSError):
-            os.unlink(path)  # ours, still locked: the next run creates a fresh one
-        os.close(fd)
+def _locked(final: Path, shown: str):
+    """Hold the lock file ``.NAME.lock`` beside ``final`` (:mod:`flexlift.plumbing.lock`)."""
+    return held_lock(final, lambda why: _refuse(shown, why), file_mode())
 
 
 def _leftovers(final: Path, kind: str) -> list[Path]:
@@ -159,10 +129,18 @@ def _leftovers(final: Path, kind: str) -> list[Path]:
     return sorted(found, key=lambda p: p.stat().st_mtime, reverse=True)
 
 
-def _remove_own(folder: Path) -> None:
-    """Remove a folder this module made (it carries the marker); anything else is left."""
-    if folder.is_dir() and not folder.is_symlink() and read_marker(folder) is not None:
-        shutil.rmtree(folder, ignore_errors=True)
+def _remove_own(folder: Path, shown: str) -> list[str]:
+    """Remove what a folder of this module lists as flexlift's (its marker's files and its
+    journal's names); anything else is left, and a warning says so. Returns the notes."""
+    mark = read_marker(folder)
+    if not folder.is_dir() or folder.is_symlink() or mark is None:
+        return []
+    listed = [f for f in mark.get("files", []) if isinstance(f, str)]
+    left = remove_listed(folder, listed + Journal(folder).entries())
+    if not left:
+        return []
+    return [f"{shown}: left {folder.name} beside it: it holds {len(left)} file(s) flexlift did "
+            f"not write (e.g. {left[0][:60]!r}); move them away, then remove the folder"]
 
 
 def recover(final: Path, shown: str) -> list[str]:
@@ -181,18 +159,14 @@ def recover(final: Path, shown: str) -> list[str]:
             olds.pop(0)
             notes.append(f"{shown}: restored the previous output, which a killed run had "
                          "moved aside")
+    kept = []
     for p in partials + olds:
-        _remove_own(p)
-    if partials or olds:
-        notes.append(f"{shown}: removed {len(partials) + len(olds)} unfinished output "
-                     "folder(s) left beside it by killed runs")
+        kept += _remove_own(p, shown)
+    if len(partials) + len(olds) > len(kept):
+        notes.append(f"{shown}: removed {len(partials) + len(olds) - len(kept)} unfinished "
+                     "output folder(s) left beside it by killed runs")
+    notes += kept
     return notes
-
-
-def _marker(run_id: str, command: str, complete: bool, files=()) -> dict:
-    return {"flexlift_output": 1, "flexlift_version": __version__, "run_id": run_id,
-            "command": command, "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-            "complete": complete, "files": sorted(files)}
 
 
 def _swap(tmp: Path, final: Path, run_id: str) -> None:
@@ -206,7 +180,8 @@ def _swap(tmp: Path, final: Path, run_id: str) -> None:
         except BaseException:
             os.replace(old, final)  # put the previous output back
             raise
-        _remove_own(old)
+        for note in _remove_own(old, os.fspath(final.name)):
+            log.warning(note)
     else:
         os.replace(tmp, final)
 
@@ -244,13 +219,17 @@ def output_folder(target: str | os.PathLike, command: str = "run") -> Iterator[P
             tmp.mkdir(mode=0o700)
             try:
                 os.chmod(tmp, dir_mode())
-                write_json(tmp / MARKER, _marker(run_id, command, complete=False))
-                yield tmp
-                write_json(tmp / MARKER, _marker(run_id, command, True, _contents(tmp) - {MARKER}))
+                with journaled(tmp) as journal:  # names listed before they are created
+                    write_json(tmp / MARKER, _marker(run_id, command, complete=False))
+                    yield tmp
+                    written = set(journal.entries()) & _contents(tmp) - {MARKER}
+                    write_json(tmp / MARKER, _marker(run_id, command, True, written))
+                journal.remove()
                 check_target(final, shown)  # the user may have put files there meanwhile
                 _swap(tmp, final, run_id)
             except BaseException:
-                shutil.rmtree(tmp, ignore_errors=True)  # made by this run just now: ours
+                for note in _remove_own(tmp, shown):  # what this run listed; nothing else
+                    log.warning(note)
                 raise
     except OSError as exc:
         raise _write_error(shown, exc) from None
@@ -279,15 +258,18 @@ class Incremental:
     """A folder being written in place (:func:`incremental_folder`).
 
     path : the folder; listed : the files the marker lists as this command's (relative POSIX
-    paths, kept across reruns). :meth:`claim` lists files before they are written (so that a
-    kill halfway leaves only files the next run knows as its own); :meth:`finish` marks the
-    folder complete, listing everything in it.
+    paths, kept across reruns); journal : the folder's journal of names claimed before they
+    are created (:mod:`flexlift.plumbing.marker`). :meth:`claim` lists files in the marker
+    before they are written (so that a kill halfway leaves only files the next run knows as its
+    own); :meth:`finish` marks the folder complete, listing what this command wrote in it.
     """
 
     def __init__(self, final: Path, shown: str, command: str, identity: str, run_id: str,
                  listed: set[str]):
         self.path, self.shown, self.command = final, shown, command
         self.identity, self.run_id, self.listed = identity, run_id, set(listed)
+        self.journal: Journal | None = None
+        self.complete = False
 
     def claim(self, *relpaths: str) -> None:
         new = set(relpaths) - self.listed
@@ -297,14 +279,15 @@ class Incremental:
 
     def remove_own(self, rel: str, expected: bytes) -> bool:
         """Remove the file ``rel`` only when it is this command's and unchanged: listed by the
-        marker, a regular file (not a link) and holding exactly ``expected`` (what the command
-        wrote there). Anything else is left as it is. Returns whether it was removed."""
+        marker, a regular file (not a link, nor reached through one) and holding exactly
+        ``expected`` (what the command wrote there). Anything else is left as it is. Returns
+        whether it was removed."""
         full = self.path / rel
-        if rel not in self.listed or full.is_symlink() or not full.is_file():
+        if rel not in self.listed or not _real_parents(self.path, rel):
             return False
         try:
-            if full.read_bytes() != expected:
-                return False  # edited since it was written: the user's now
+            if not stat.S_ISREG(os.lstat(full).st_mode) or full.read_bytes() != expected:
+                return False  # a link, or edited since it was written: the user's now
             full.unlink()
         except OSError:
             return False
@@ -313,14 +296,17 @@ class Incremental:
         return True
 
     def finish(self, compact=None) -> None:
-        """Mark the folder complete, listing everything in it; when that list would make the
-        marker too large to be read back (:func:`read_marker`), the paths ``compact(relpath)``
-        selects are left out (the command recognises them by their content; other commands
-        then refuse to replace the folder rather than guess)."""
-        self.listed = _contents(self.path) - {MARKER}
+        """Mark the folder complete, listing what this command wrote in it (the marker's and
+        the journal's names that exist); when that list would make the marker too large to be
+        read back (:func:`read_marker`), the paths ``compact(relpath)`` selects are left out
+        (the command recognises them by their content; other commands then refuse to replace
+        the folder rather than guess)."""
+        journaled_names = set(self.journal.entries()) if self.journal else set()
+        self.listed = (self.listed | journaled_names) & _contents(self.path) - {MARKER}
         if compact is not None and sum(len(p) + 8 for p in self.listed) > MARKER_LISTING_MAX:
             self.listed = {p for p in self.listed if not compact(p)}
         self._marker(complete=True)
+        self.complete = True
 
     def _marker(self, complete: bool) -> None:
         write_json(self.path / MARKER, {**_marker(self.run_id, self.command, complete,
@@ -337,9 +323,20 @@ def _check_place(final: Path, shown: str) -> None:
         raise _refuse(shown, "is a file, not a folder; choose a new or empty folder")
 
 
-def _check_own(inc: Incremental, owns, previous: dict) -> list[Path]:
-    """Refuse a folder holding anything the command did not write; its temporary leftovers
-    (files of an atomic write of one of its own files, cut short by a kill) are returned."""
+def _kind(full: Path) -> str:
+    """'dir', 'file' or '' (a link, or anything else) without following links."""
+    try:
+        mode = os.lstat(full).st_mode
+    except OSError:
+        return ""
+    return "dir" if stat.S_ISDIR(mode) else "file" if stat.S_ISREG(mode) else ""
+
+
+def _check_own(inc: Incremental, owns, previous: dict, journaled_names: set[str]
+               ) -> tuple[list[Path], set[str]]:
+    """Refuse a folder holding anything the command did not write. Returns the temporary
+    leftovers to remove (files of an atomic write cut short by a kill: hidden temporaries the
+    journal lists) and the other names the journal lists that exist (the command's own)."""
     shown, command = inc.shown, inc.command
     if previous.get("command") != command:
         other = str(previous.get("command"))[:20]
@@ -349,22 +346,21 @@ def _check_own(inc: Incremental, owns, previous: dict) -> list[Path]:
         raise _refuse(shown, f"holds another `flexlift {command}` (its input differs); rerun "
                              "with the input it was started with to continue it, or choose "
                              "another --out")
-    temps = []
+    temps, own = [], set()
     for p in sorted(_contents(inc.path) - {MARKER}):
         full = inc.path / p
-        kind_ok = full.is_dir() or full.is_file()
-        if not full.is_symlink() and kind_ok and (p in inc.listed or owns(p, full)):
+        kind = _kind(full) if _real_parents(inc.path, p) else ""
+        if kind and (p in inc.listed or owns(p, full)):
             continue
-        parent, _, name = p.rpartition("/")
-        target = atomic_leftover(name)
-        sibling = f"{parent}/{target}" if parent else target
-        if (target and full.is_file() and not full.is_symlink()
-                and (sibling in inc.listed or owns(sibling, None))):
-            temps.append(full)
+        if kind and p in journaled_names:  # claimed by a run of this command before it wrote
+            if kind == "file" and atomic_leftover(p.rpartition("/")[2]):
+                temps.append(full)
+            else:
+                own.add(p)
             continue
         raise _refuse(shown, f"holds {p[:60]!r}, which flexlift did not write; move it away "
                              "or choose another --out")
-    return temps
+    return temps, own
 
 
 @contextlib.contextmanager
@@ -375,14 +371,15 @@ def incremental_folder(target: str | os.PathLike, command: str, identity: str,
     identity : what the folder is the output of (e.g. a checksum of the input); a folder of
         the same command and identity is continued, any other refused
     owns : ``owns(relpath, path)`` is True for a file the command recognises as its own by its
-        content though the marker does not list it (``path`` None: by its name alone, for a
-        temporary leftover of it)
+        content (it carries the input's checksum) though the marker does not list it
 
     The folder is locked while open (a second run is refused). Nothing is removed but the
-    temporary leftovers of the command's own atomic writes and, through
-    :meth:`Incremental.remove_own`, its own files left unchanged since it wrote them; an exception leaves everything
-    written so far, with the marker saying ``complete: false`` (other commands refuse such a
-    folder; a rerun of the same command and identity continues it).
+    temporary files of the command's own atomic writes that its journal lists (a kill cut them
+    short) and, through :meth:`Incremental.remove_own`, its own files left unchanged since it
+    wrote them; a file that merely looks like one of flexlift's is refused, never removed. An
+    exception leaves everything written so far, with the marker saying ``complete: false``
+    (other commands refuse such a folder; a rerun of the same command and identity continues
+    it).
     """
     shown = os.fspath(target)
     final = Path(os.path.abspath(shown))
@@ -392,7 +389,7 @@ def incremental_folder(target: str | os.PathLike, command: str, identity: str,
         final.parent.mkdir(parents=True, exist_ok=True)
         with _locked(final, shown):
             _check_place(final, shown)
-            previous, temps = {}, []
+            previous, temps, own = {}, [], set()
             if final.exists() and os.listdir(final):
                 previous = read_marker(final)
                 if previous is None:
@@ -401,15 +398,20 @@ def incremental_folder(target: str | os.PathLike, command: str, identity: str,
             listed = {p for p in previous.get("files", []) if isinstance(p, str)}
             inc = Incremental(final, shown, command, identity, run_id, listed)
             if previous:
-                temps = _check_own(inc, owns, previous)
+                temps, own = _check_own(inc, owns, previous, set(Journal(final).entries()))
             final.mkdir(mode=0o700, exist_ok=True)
             os.chmod(final, dir_mode())
             for t in temps:
                 with contextlib.suppress(OSError):
                     t.unlink()
-            inc.listed = {p for p in inc.listed if (final / p).exists()}
-            inc._marker(complete=False)
-            yield inc
+            own = {p for p in own if not owns(p, final / p)}  # those by content need no listing
+            inc.listed = {p for p in inc.listed | own if (final / p).exists()}
+            inc._marker(complete=False)  # the journal's names are in the marker: start anew
+            with journaled(final) as journal:
+                inc.journal = journal
+                yield inc
+            if inc.complete:
+                journal.remove()
     except OSError as exc:
         what = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
         reason = exc.strerror or errno.errorcode.get(exc.errno or 0, str(exc))

@@ -1,8 +1,12 @@
 """Atomic file writes: a reader never sees a half-written file.
 
 Every file flexlift writes goes through :func:`atomic_file` (or :func:`write_text` /
-:func:`write_json` built on it): the content is written to a hidden temporary sibling and
-renamed into place, so an interrupted write leaves the previous file (or none) as it was.
+:func:`write_json` built on it): the content is written to a hidden temporary sibling
+``.NAME.<8 hex digits><suffix>``, created new (never through a link, never an existing file)
+and renamed into place, so an interrupted write leaves the previous file (or none) as it was.
+Inside a folder being written by a run (:func:`flexlift.plumbing.marker.journaled`), the
+folders it creates, the temporary and the final name are journaled before they are created,
+so the leftovers of a killed run are known by their listing, never by the look of their name.
 Files get the permissions an ordinary ``open()`` would give them (0644 under the usual umask
 022), not the 0600 of a bare temporary file: outputs are meant to be archived and sent on.
 """
@@ -12,9 +16,11 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import tempfile
+import secrets
 from collections.abc import Iterator
 from pathlib import Path
+
+from flexlift.plumbing.marker import claim
 
 
 def current_umask() -> int:
@@ -34,15 +40,38 @@ def dir_mode() -> int:
     return 0o777 & ~current_umask()
 
 
+def make_folders(folder: Path) -> None:
+    """Create ``folder`` and its missing parents, each journaled before it is made."""
+    missing = []
+    p = Path(os.path.abspath(folder))
+    while not p.is_dir():
+        missing.append(p)
+        if p.parent == p:
+            break
+        p = p.parent
+    for d in reversed(missing):
+        claim(d)
+        with contextlib.suppress(FileExistsError):
+            d.mkdir()
+
+
 @contextlib.contextmanager
 def atomic_file(path: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; when the block ends without an exception, the
-    temporary file is renamed to ``path``, otherwise removed (it is this function's own)."""
+    """Yield a new temporary path beside ``path``; when the block ends without an exception,
+    the temporary file is renamed to ``path``, otherwise removed (it is this function's own)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or ".tmp", dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
+    make_folders(path.parent)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
+    for _ in range(100):
+        tmp = path.parent / f".{path.name}.{secrets.token_hex(4)}{suffix or '.tmp'}"
+        claim(tmp, path)
+        try:
+            os.close(os.open(tmp, flags, 0o600))
+            break
+        except FileExistsError:
+            continue
+    else:  # pragma: no cover - 100 collisions of 32 random bits
+        raise FileExistsError(f"no free temporary name beside {path}")
     try:
         yield tmp
         os.chmod(tmp, file_mode())
