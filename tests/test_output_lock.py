@@ -208,3 +208,14 @@ def test_every_name_a_run_writes_is_journaled_before_it_exists(tmp_path, monkeyp
     assert "sub" in names and "sub/a.txt" in names
     assert any(n.startswith("sub/.a.txt.") and n.endswith(".tmp") for n in names)  # its temporary
     assert not (tmp_path / "out" / JOURNAL).exists()  # the finished folder has none
+
+
+@pytest.mark.parametrize("command", [["loads"], ["statics"]], ids=["loads", "statics"])
+def test_a_commands_own_output_is_replaced_by_its_rerun(tmp_path, command):
+    """Every file and folder a command writes is listed, so its rerun replaces the folder."""
+    out = tmp_path / "out"
+    assert main([*command, "--out", str(out)]) == 0
+    marker = json.loads((out / MARKER).read_text())
+    assert marker["complete"] and marker["files"]
+    assert not (out / JOURNAL).exists()
+    assert main([*command, "--out", str(out)]) == 0

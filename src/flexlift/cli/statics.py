@@ -58,7 +58,6 @@ def _main(args) -> int:
 
             rows = np.column_stack([st.x, st.w, np.degrees(st.slope), st.contact, st.reaction,
                                     st.moment / 1e6, st.utilisation])
-            (out / "tables").mkdir(parents=True, exist_ok=True)
             write_text(out / "tables" / "statics.csv",
                        "x_m,height_m,slope_deg,contact,seabed_force_N,moment_MNm,utilisation\n"
                        + "\n".join(",".join(f"{v:.6g}" for v in r) for r in rows) + "\n")
