@@ -1,7 +1,7 @@
 """A library call changes nothing process-wide: importing flexlift and running a stage (as a
-notebook would) leaves logging, the cycle collector, numba's options and the process's
-children as they were, and forks nothing; the CLI's settings last only as long as its
-command."""
+notebook would) leaves logging, the cycle collector, numba's options, matplotlib's backend
+and the process's children as they were, and forks nothing; the CLI's settings last only as
+long as its command."""
 
 from __future__ import annotations
 
@@ -19,6 +19,7 @@ _NOTEBOOK = r"""
 import gc, json, logging, multiprocessing, os, signal, sys
 from pathlib import Path
 
+import matplotlib
 import numba
 
 forks = []
@@ -34,7 +35,8 @@ def state():
             "gc": [gc.isenabled(), gc.get_freeze_count(), list(gc.get_threshold())],
             "children": len(multiprocessing.active_children()),
             "signals": [repr(signal.getsignal(s)) for s in (signal.SIGINT, signal.SIGTERM)],
-            "numba_cache_dir": numba.config.CACHE_DIR}
+            "numba_cache_dir": numba.config.CACHE_DIR,
+            "matplotlib_backend": matplotlib.get_backend()}
 
 before = state()
 from flexlift.scenario import load_scenario
@@ -53,8 +55,9 @@ print(json.dumps({"before": before, "after": after, "forks": len(forks),
 def test_a_stage_run_from_python_changes_nothing_process_wide(tmp_path):
     """With figure processes asked for by the environment, a library call still draws every
     figure itself (no fork) and never freezes the collector; afterwards logging, the
-    collector, the signal handlers, numba's cache option and the children are as before."""
-    env = dict(os.environ, MPLBACKEND="Agg", FLEXLIFT_FIGURE_PROCESSES="2")
+    collector, the signal handlers, numba's cache option, matplotlib's backend (a notebook's
+    own; svg here, as Agg is what flexlift draws with) and the children are as before."""
+    env = dict(os.environ, MPLBACKEND="svg", FLEXLIFT_FIGURE_PROCESSES="2")
     res = subprocess.run([sys.executable, "-c", _NOTEBOOK, str(tmp_path / "out")], env=env,
                          capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr

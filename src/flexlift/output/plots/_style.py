@@ -30,13 +30,11 @@ import warnings
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use("Agg")  # files only; nothing in flexlift opens a window
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.ticker import (  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.ticker import (
     FuncFormatter,
     Locator,
     LogFormatterSciNotation,
@@ -68,12 +66,22 @@ MARGINS = {"left": 0.8, "right": 0.2, "bottom": 0.55, "top": 0.4, "hgap": 0.5, "
 SUPTITLE = 0.3
 
 
+#: the keywords of :func:`new_figure` that go to ``Figure.subplots`` (the others to ``Figure``)
+_SUBPLOTS_KW = ("sharex", "sharey", "squeeze", "width_ratios", "height_ratios", "subplot_kw",
+                "gridspec_kw")
+
+
 def new_figure(nrows: int = 1, ncols: int = 1, margins: dict | None = None, **kw):
-    """A figure and axes in the house style. ``margins`` overrides entries of
-    :data:`MARGINS` [in]; they are applied when the figure is saved (a title added with
-    ``suptitle`` gets :data:`SUPTITLE` more at the top)."""
-    with plt.rc_context(STYLE):
-        fig, ax = plt.subplots(nrows, ncols, **kw)
+    """A figure and axes in the house style, as ``plt.subplots`` takes them. ``margins``
+    overrides entries of :data:`MARGINS` [in]; they are applied when the figure is saved (a
+    title added with ``suptitle`` gets :data:`SUPTITLE` more at the top). The figure is
+    matplotlib's :class:`~matplotlib.figure.Figure` on an Agg canvas, not pyplot's: files
+    only, no window, and the caller's pyplot backend (a notebook's) is left as it was."""
+    sub = {k: kw.pop(k) for k in _SUBPLOTS_KW if k in kw}
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(**kw)
+        FigureCanvasAgg(fig)
+        ax = fig.subplots(nrows, ncols, **sub)
     fig._flexlift_margins = {**MARGINS, **(margins or {}), "rows": nrows, "cols": ncols}
     return fig, ax
 
@@ -192,9 +200,9 @@ def _write(fig, path: Path) -> None:
     from flexlift.plumbing.atomic import atomic_file
 
     prepare(fig)
-    with plt.rc_context(STYLE):
+    with matplotlib.rc_context(STYLE):
         fig.set_dpi(STYLE["savefig.dpi"])
-        canvas = fig.canvas  # Agg (see the top): what savefig draws on, its facecolor, no crop
+        canvas = fig.canvas  # Agg (new_figure): what savefig draws on, its facecolor, no crop
         if not isinstance(canvas, FigureCanvasAgg):
             canvas = FigureCanvasAgg(fig)
         canvas.draw()
@@ -444,7 +452,7 @@ def _warm_up() -> None:
     ax.legend()
     fig.suptitle("Warm-up", fontweight="bold")
     try:
-        with plt.rc_context(STYLE):
+        with matplotlib.rc_context(STYLE):
             fig.savefig(io.BytesIO(), format="png")
     finally:
         plt.close(fig)
