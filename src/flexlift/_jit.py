@@ -110,7 +110,8 @@ def cache_folder(stamp: str, bases: list[Path] | None = None) -> Path | None:
     return None
 
 
-_FOLDER = cache_folder(sources_stamp())
+#: this process's cache folder (None: nothing cached; nothing compiled under NUMBA_DISABLE_JIT)
+_FOLDER = None if numba.config.DISABLE_JIT else cache_folder(sources_stamp())
 
 
 @contextlib.contextmanager
