@@ -391,18 +391,38 @@ def test_an_interrupt_kills_the_figure_processes(tmp_path):
 
     workers = []
     with pytest.raises(KeyboardInterrupt):
-        with _style.figures_in_background(2):
+        with _style.figures_in_background(2) as pool:
             for k in range(2):
                 _style.draw(tmp_path / f"{k}.png", _slow_plot)
             time.sleep(0.5)
-            workers = list(_style._BACKGROUND.workers)
+            workers = list(pool.workers)
             t0 = time.monotonic()
             raise KeyboardInterrupt
     assert time.monotonic() - t0 < 30.0
-    assert len(workers) == 2 and _style._BACKGROUND is None
+    assert len(workers) == 2 and _style._BACKGROUND.get() is None
     assert list(tmp_path.iterdir()) == []
     for p in workers:  # stopped and reaped: no such process any more, not even a zombie
         assert _gone(p.pid)
+
+
+def test_the_figure_processes_serve_the_block_that_opened_them_only():
+    """The pool is the opening thread's (a context variable): another thread's figures are
+    drawn where it runs, and outside the block nothing is handed on."""
+    import threading
+
+    from flexlift.output.plots import _style
+
+    assert _style._BACKGROUND.get() is None
+    with _style.figures_in_background(1) as pool:
+        assert pool is not None and _style._BACKGROUND.get() is pool
+        with _style.figures_in_background(2) as inner:  # nested: the outer block's pool
+            assert inner is pool
+        other = []
+        t = threading.Thread(target=lambda: other.append(_style._BACKGROUND.get()))
+        t.start()
+        t.join(30)
+        assert other == [None]
+    assert _style._BACKGROUND.get() is None
 
 
 def _gone(pid: int) -> bool:
@@ -440,7 +460,7 @@ def test_the_figures_a_dead_figure_process_leaves_are_drawn_here(tmp_path):
     plain = (tmp_path / "after0.png").read_bytes()
     for name in ("dead.png", "after1.png", "after2.png"):
         assert (tmp_path / name).read_bytes() == plain
-    assert _style._BACKGROUND is None
+    assert _style._BACKGROUND.get() is None
 
 
 _ORPHAN = r"""
@@ -451,10 +471,10 @@ def slow():
     time.sleep(60)
     return _style.plt.subplots()[0]
 
-with _style.figures_in_background(2):
+with _style.figures_in_background(2) as pool:
     _style.draw(sys.argv[1] + "/slow.png", slow)
     time.sleep(0.5)
-    print(" ".join(str(p.pid) for p in _style._BACKGROUND.workers), flush=True)
+    print(" ".join(str(p.pid) for p in pool.workers), flush=True)
     os.kill(os.getpid(), signal.SIGKILL)
 """
 

@@ -179,24 +179,34 @@ def test_one_mode_numbering_and_one_time_unit(tanker_run):
     assert re.search(r"60 s before the first separation", text)
 
 
-def test_the_heap_is_frozen_during_a_run_and_released_after(monkeypatch, tmp_path):
-    """The collector skips the objects from before the run (its full collections walked the
-    imports' few hundred thousand objects), inside the stages, and has them back after; an
-    outer freeze is left to its owner."""
+def test_the_heap_is_frozen_and_figures_drawn_beside_during_flexlift_run(monkeypatch, tmp_path):
+    """`flexlift run` (the command, not the library) freezes the objects from before the run
+    for the collector (its full collections walked the imports' few hundred thousand
+    objects) and draws the figures in figure processes while the stages compute; both are
+    released after the stages, and :func:`run_all` alone does neither. An outer freeze is
+    left to its owner."""
     import gc
 
+    import flexlift.cli.run as cli_run
     import flexlift.stages.run as run_mod
+    from flexlift.output.plots import _style
 
     seen = []
 
     def stages(*a):
-        seen.append(gc.get_freeze_count())
+        seen.append((gc.get_freeze_count(), _style._BACKGROUND.get()))
         return []
 
     monkeypatch.setattr(run_mod, "_run_stages", stages)
+    monkeypatch.setenv(_style.PROCESSES_ENV, "2")
     assert gc.get_freeze_count() == 0
     run_mod.run_all(None, tmp_path)
-    assert seen[0] > 1000 and gc.get_freeze_count() == 0
+    assert seen.pop() == (0, None)
+    assert main(["run", "--quiet", "--out", str(tmp_path / "out")]) == 0
+    frozen, pool = seen.pop()
+    assert frozen > 1000 and isinstance(pool, _style._Background)
+    assert gc.get_freeze_count() == 0 and _style._BACKGROUND.get() is None
+    assert cli_run.run_all is run_mod.run_all
     with pytest.raises(RuntimeError):
         with run_mod.heap_frozen():
             raise RuntimeError

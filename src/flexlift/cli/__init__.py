@@ -9,11 +9,16 @@ stderr naming the field, the value and what is allowed; never a traceback), 130 
 (Ctrl-C), 143 terminated (SIGTERM). An interrupted or terminated command removes its
 half-built output and leaves the previous one intact. An unexpected exception (a bug, or
 memory running out) is one line on stderr and exit 1; with ``-v`` its traceback is printed too.
+
+:func:`main` may also be called from Python (a notebook, a benchmark): what it sets for the
+command (the ``flexlift`` logger, the SIGTERM handler) is as the caller had it again when it
+returns.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
 import signal
@@ -60,14 +65,14 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a one-line usage error (code 2)
         return int(exc.code or 0)
-    held = _HeldWarnings()
-    _configure_logging(args.verbose, held)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
+    held = _HeldWarnings()
     previous = _terminate_as_interrupt()
     try:
-        code = int(args.func(args) or 0)
+        with _command_logging(args.verbose, held):
+            code = int(args.func(args) or 0)
     except InputError as exc:  # bad input: this one line only, warnings dropped
         sys.stderr.write(f"flexlift {args.command}: error: {clean(str(exc), LINE_LIMIT)}\n")
         return 2
@@ -91,7 +96,6 @@ def main(argv: list[str] | None = None) -> int:
                          f"{clean(str(exc), 200)} (please report it; -v shows the traceback)\n")
         return 1
     finally:
-        logging.getLogger("flexlift").removeHandler(held)
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
     held.flush_to(sys.stderr)
@@ -133,11 +137,16 @@ class _HeldWarnings(logging.Handler):
             stream.write(line + "\n")
 
 
-def _configure_logging(verbose: int, held: logging.Handler) -> None:
+@contextlib.contextmanager
+def _command_logging(verbose: int, held: logging.Handler):
+    """The ``flexlift`` logger as the command shows it, within the block only: warnings to
+    ``held``, with ``-v`` the progress detail live on stderr, nothing passed on to the root
+    logger. Afterwards its handlers, level and propagation are the caller's again (a
+    notebook's own handler included)."""
     root = logging.getLogger("flexlift")
-    for h in list(root.handlers):
-        if isinstance(h, _HeldWarnings | logging.StreamHandler):
-            root.removeHandler(h)
+    saved = (list(root.handlers), root.level, root.propagate)
+    for h in saved[0]:
+        root.removeHandler(h)
     root.setLevel(logging.WARNING - 10 * min(verbose, 2))
     root.propagate = False
     root.addHandler(held)
@@ -146,6 +155,15 @@ def _configure_logging(verbose: int, held: logging.Handler) -> None:
         live.setFormatter(logging.Formatter("flexlift: %(levelname)s: %(message)s"))
         live.addFilter(lambda r: r.levelno < logging.WARNING)
         root.addHandler(live)
+    try:
+        yield
+    finally:
+        for h in list(root.handlers):
+            root.removeHandler(h)
+        for h in saved[0]:
+            root.addHandler(h)
+        root.setLevel(saved[1])
+        root.propagate = saved[2]
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,4 +1,12 @@
 """All stages on one scenario, for ``flexlift run``: their outputs and the run's summary.
+
+:func:`run_all` changes nothing in the calling process beyond its output folder: it draws
+every figure in this process and leaves the cycle collector alone. What makes ``flexlift run``
+fast is the caller's to choose, around the call (the CLI does both)::
+
+    from flexlift.output.plots._style import figures_in_background
+    with heap_frozen(), figures_in_background():  # figure processes where two cores are free
+        outputs = run_all(scenario, out)
 """
 
 from __future__ import annotations
@@ -38,12 +46,10 @@ def run_all(
 ) -> list[StageOutput]:
     """Run ``stages`` into the folder ``out`` (already created); return their outputs.
     ``progress``: an object with ``stage(k, n, text)`` and ``bar(fraction, label)`` (the CLI's
-    progress display), or None."""
-    from flexlift.output.plots._style import figures_in_background
-
-    progress = progress or _Silent()
-    with heap_frozen(), figures_in_background():  # figures drawn while the next stage computes
-        return _run_stages(scenario, out, stages, controls, progress)
+    progress display), or None. The figures are drawn in this process, or by the figure
+    processes of a :func:`~flexlift.output.plots._style.figures_in_background` block the
+    caller has opened (module docstring)."""
+    return _run_stages(scenario, out, stages, controls, progress or _Silent())
 
 
 @contextlib.contextmanager
@@ -52,7 +58,9 @@ def heap_frozen():
     (:func:`gc.freeze`; released again at its end, :func:`gc.unfreeze`). The imports (numpy,
     scipy, xarray, numba, matplotlib) leave a few hundred thousand objects that the collector
     otherwise walks at every full collection: three of them during a run of the tanker took
-    about 1 s, a seventh of the run. Garbage of the run itself is collected as usual."""
+    about 1 s, a seventh of the run. Garbage of the run itself is collected as usual. The
+    collector is the whole process's: ``flexlift run`` enters this block around
+    :func:`run_all`, which itself never does."""
     if gc.get_freeze_count():  # frozen by a caller: theirs to release
         yield
         return

@@ -28,23 +28,30 @@ CDF_PANELS = 6
 
 def new_figure(nrows: int, ncols: int, figsize, left: float = 0.08, top: float = 0.97, **kw):
     """A figure in the house style with a fixed layout (a sweep's report is drawn after every
-    run, and resumed runs redraw it: matplotlib's constrained layout would double its cost)."""
-    import matplotlib.pyplot as plt
+    run, and resumed runs redraw it: matplotlib's constrained layout would double its cost).
+    A :class:`~matplotlib.figure.Figure` on an Agg canvas, not pyplot's: the caller's pyplot
+    backend is left alone (flexlift.output.plots._style.new_figure)."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    with plt.rc_context(STYLE):
-        fig, axes = plt.subplots(nrows, ncols, figsize=figsize, **kw)
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=figsize)
+        FigureCanvasAgg(fig)
+        axes = fig.subplots(nrows, ncols, **kw)
     fig.subplots_adjust(left=left, right=0.96, bottom=0.12 / nrows ** 0.5, top=top,
                         wspace=0.3, hspace=0.45)
     return fig, axes
 
 
 def png(fig) -> bytes:
-    """The figure as PNG bytes (closed afterwards)."""
+    """The figure as PNG bytes (closed afterwards, if pyplot made it)."""
+    import matplotlib
     import matplotlib.pyplot as plt
 
     buf = io.BytesIO()
     try:
-        with plt.rc_context(STYLE):
+        with matplotlib.rc_context(STYLE):
             fig.savefig(buf, format="png")
     finally:
         plt.close(fig)

@@ -4,18 +4,23 @@ Figures are laid out by fixed margins in inches (:func:`new_figure`), not by a l
 matplotlib's constrained layout draws every figure twice (once to measure, once to render),
 which was half of the time of ``flexlift run``. Each save is one draw at ``savefig.dpi``.
 
-Inside :func:`figures_in_background` (``flexlift run`` uses it) :func:`draw` hands the
-building, drawing and writing of each PNG to one of :func:`figure_processes` figure processes
-(forked once, at the first figure, at a lower priority) and returns at once, so the figures
-are drawn while the next stage computes; leaving the block waits for them all (an error in
-one is raised there; an exception or Ctrl-C in the block stops them first).
-``FLEXLIFT_FIGURE_PROCESSES=0`` (or a platform without ``fork``) draws every figure in the
-calling process, as the single-stage commands always do.
+Inside a :func:`figures_in_background` block (``flexlift run`` opens one around its stages)
+:func:`draw` hands the building, drawing and writing of each PNG to one of
+:func:`figure_processes` figure processes (forked once, at the first figure, at a lower
+priority) and returns at once, so the figures are drawn while the next stage computes;
+leaving the block waits for them all (an error in one is raised there; an exception or
+Ctrl-C in the block stops them first) and ends the processes. The block is the caller's: the
+library never opens one, so outside it (a single-stage command, a notebook) every figure is
+drawn in the calling process and nothing is forked; the block's processes are seen by the
+thread (or task) that opened it only (a context variable, not a module-wide setting).
+``FLEXLIFT_FIGURE_PROCESSES=0`` (or a platform without ``fork``) makes the block draw in the
+calling process too.
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import gc
 import os
 import signal
@@ -25,13 +30,11 @@ import warnings
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use("Agg")  # files only; nothing in flexlift opens a window
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.ticker import (  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.ticker import (
     FuncFormatter,
     Locator,
     LogFormatterSciNotation,
@@ -63,12 +66,22 @@ MARGINS = {"left": 0.8, "right": 0.2, "bottom": 0.55, "top": 0.4, "hgap": 0.5, "
 SUPTITLE = 0.3
 
 
+#: the keywords of :func:`new_figure` that go to ``Figure.subplots`` (the others to ``Figure``)
+_SUBPLOTS_KW = ("sharex", "sharey", "squeeze", "width_ratios", "height_ratios", "subplot_kw",
+                "gridspec_kw")
+
+
 def new_figure(nrows: int = 1, ncols: int = 1, margins: dict | None = None, **kw):
-    """A figure and axes in the house style. ``margins`` overrides entries of
-    :data:`MARGINS` [in]; they are applied when the figure is saved (a title added with
-    ``suptitle`` gets :data:`SUPTITLE` more at the top)."""
-    with plt.rc_context(STYLE):
-        fig, ax = plt.subplots(nrows, ncols, **kw)
+    """A figure and axes in the house style, as ``plt.subplots`` takes them. ``margins``
+    overrides entries of :data:`MARGINS` [in]; they are applied when the figure is saved (a
+    title added with ``suptitle`` gets :data:`SUPTITLE` more at the top). The figure is
+    matplotlib's :class:`~matplotlib.figure.Figure` on an Agg canvas, not pyplot's: files
+    only, no window, and the caller's pyplot backend (a notebook's) is left as it was."""
+    sub = {k: kw.pop(k) for k in _SUBPLOTS_KW if k in kw}
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(**kw)
+        FigureCanvasAgg(fig)
+        ax = fig.subplots(nrows, ncols, **sub)
     fig._flexlift_margins = {**MARGINS, **(margins or {}), "rows": nrows, "cols": ncols}
     return fig, ax
 
@@ -187,9 +200,9 @@ def _write(fig, path: Path) -> None:
     from flexlift.plumbing.atomic import atomic_file
 
     prepare(fig)
-    with plt.rc_context(STYLE):
+    with matplotlib.rc_context(STYLE):
         fig.set_dpi(STYLE["savefig.dpi"])
-        canvas = fig.canvas  # Agg (see the top): what savefig draws on, its facecolor, no crop
+        canvas = fig.canvas  # Agg (new_figure): what savefig draws on, its facecolor, no crop
         if not isinstance(canvas, FigureCanvasAgg):
             canvas = FigureCanvasAgg(fig)
         canvas.draw()
@@ -219,8 +232,9 @@ def draw(path: str | os.PathLike, plot, *args, **kwargs) -> Path:
     :func:`figures_in_background` a figure process does both (``plot`` and its arguments are
     pickled to it; this process creates no matplotlib object at all). Returns the path."""
     path = Path(path)
-    if _BACKGROUND is not None:
-        _BACKGROUND.submit(plot, args, kwargs, path)
+    background = _BACKGROUND.get()
+    if background is not None:
+        background.submit(plot, args, kwargs, path)
         return path
     save(plot(*args, **kwargs), path)
     return path
@@ -296,13 +310,12 @@ def _worker_start(parent: int) -> None:
     is the parent's to handle (it stops the figure processes), SIGTERM ends it, it runs at a
     lower priority (:data:`WORKER_NICENESS`), its figures are drawn here (not handed on), and
     its collector leaves the inherited heap alone (no pages copied for it)."""
-    global _BACKGROUND
     _end_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the parent's handler
     with contextlib.suppress(OSError):
         os.nice(WORKER_NICENESS)
-    _BACKGROUND = None
+    _BACKGROUND.set(None)
     gc.freeze()
 
 
@@ -404,7 +417,10 @@ class _Background:
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
-_BACKGROUND: _Background | None = None
+#: the figure processes of the innermost :func:`figures_in_background` block of this thread
+#: (or task), None outside one
+_BACKGROUND: contextvars.ContextVar[_Background | None] = contextvars.ContextVar(
+    "flexlift_figure_processes", default=None)
 
 
 _WARM = False
@@ -436,7 +452,7 @@ def _warm_up() -> None:
     ax.legend()
     fig.suptitle("Warm-up", fontweight="bold")
     try:
-        with plt.rc_context(STYLE):
+        with matplotlib.rc_context(STYLE):
             fig.savefig(io.BytesIO(), format="png")
     finally:
         plt.close(fig)
@@ -445,26 +461,28 @@ def _warm_up() -> None:
 
 @contextlib.contextmanager
 def figures_in_background(processes: int | None = None):
-    """Within the block, :func:`draw` hands each figure to ``processes`` figure processes
-    (default :func:`figure_processes`; 0: drawn in this process). Leaving the block waits
-    for every figure and raises :class:`FigureError` if one failed; an exception in the
-    block stops the figure processes before it propagates. Inside another such block this
-    one adds nothing: its figures go to the outer block's processes and are complete when
-    that block ends."""
-    global _BACKGROUND
+    """Within the block, :func:`draw` (in this thread or task) hands each figure to
+    ``processes`` figure processes (default :func:`figure_processes`; 0: drawn in this
+    process). Leaving the block waits for every figure and raises :class:`FigureError` if one
+    failed; an exception in the block stops the figure processes before it propagates; either
+    way none is left running. Inside another such block this one adds nothing: its figures go
+    to the outer block's processes and are complete when that block ends. Yields the figure
+    processes' pool (:class:`_Background`), or None when the figures are drawn here."""
     n = figure_processes() if processes is None else int(processes)
-    if n <= 0 or _BACKGROUND is not None or not hasattr(os, "fork"):
-        yield
+    outer = _BACKGROUND.get()
+    if n <= 0 or outer is not None or not hasattr(os, "fork"):
+        yield outer
         return
     _warm_up()
-    _BACKGROUND = bg = _Background(n)
+    bg = _Background(n)
+    token = _BACKGROUND.set(bg)
     try:
         try:
-            yield
+            yield bg
         except BaseException:
             bg.abort()
             raise
         bg.finish()
     finally:
         bg.abort()
-        _BACKGROUND = None
+        _BACKGROUND.reset(token)
