@@ -219,3 +219,30 @@ def test_a_commands_own_output_is_replaced_by_its_rerun(tmp_path, command):
     assert marker["complete"] and marker["files"]
     assert not (out / JOURNAL).exists()
     assert main([*command, "--out", str(out)]) == 0
+
+
+def _small_figure(label):
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    fig.add_subplot().set_title(label)
+    return fig
+
+
+def test_figure_processes_started_before_the_folder_journal_their_files(tmp_path):
+    """A caller may open the figure processes first and the output folder inside: the figures
+    the processes write are still listed, so the next run replaces the folder."""
+    from flexlift.output.plots._style import draw, figures_in_background
+
+    out = tmp_path / "out"
+    with figures_in_background(2) as pool:
+        assert pool is not None
+        draw(tmp_path / "first.png", _small_figure, "started")  # the processes start here
+        with output_folder(out, "modes") as tmp:
+            draw(tmp / "figures" / "a.png", _small_figure, "a")
+            pool.finish()
+    marker = json.loads((out / MARKER).read_text())
+    assert "figures/a.png" in marker["files"] and "figures" in marker["files"]
+    with output_folder(out, "modes") as tmp:  # ours: replaced
+        write_text(tmp / "b.txt", "b")
+    assert sorted(os.listdir(out)) == [MARKER, "b.txt"]

@@ -26,8 +26,8 @@ from pathlib import Path
 
 from flexlift import __version__
 
-__all__ = ["JOURNAL", "MARKER", "Journal", "claim", "journaled", "marker", "read_marker",
-           "remove_listed"]
+__all__ = ["JOURNAL", "MARKER", "Journal", "active_roots", "adopted", "claim", "journaled",
+           "marker", "read_marker", "remove_listed"]
 
 #: the marker file in every folder flexlift writes
 MARKER = ".flexlift-output"
@@ -149,6 +149,25 @@ def journaled(root: Path) -> Iterator[Journal]:
         yield journal
     finally:
         _ACTIVE.pop(journal.root, None)
+
+
+def active_roots() -> tuple[str, ...]:
+    """The folders this process is writing now (to hand to a process that writes for it)."""
+    return tuple(str(r) for r in _ACTIVE)
+
+
+@contextlib.contextmanager
+def adopted(roots: tuple[str, ...]) -> Iterator[None]:
+    """In a helper process (e.g. a figure process started before the run opened its folder):
+    journal into the folders ``roots`` of the process it writes for, while the block runs."""
+    added = [Path(r) for r in roots if Path(r) not in _ACTIVE]
+    for r in added:
+        _ACTIVE[r] = Journal(r)
+    try:
+        yield
+    finally:
+        for r in added:
+            _ACTIVE.pop(r, None)
 
 
 def claim(*paths: Path) -> None:

@@ -42,6 +42,8 @@ from matplotlib.ticker import (
     NullLocator,
 )
 
+from flexlift.plumbing.marker import active_roots
+
 STYLE = {
     "figure.figsize": (8.0, 4.5),
     "figure.dpi": 100,
@@ -319,14 +321,19 @@ def _worker_start(parent: int) -> None:
     gc.freeze()
 
 
-def _worker_draw(job: bytes, path: Path) -> str | None:
+def _worker_draw(job: bytes, path: Path, roots: tuple[str, ...] = ()) -> str | None:
     """In a figure process: draw the pickled ``(plot, args, kwargs)`` into ``path``; None, or
-    on failure the file's name (the traceback printed to stderr)."""
+    on failure the file's name (the traceback printed to stderr). ``roots``: the output
+    folders the run is writing (its names are journaled there before they are created, even
+    when this process was started before the run opened them)."""
     import pickle
+
+    from flexlift.plumbing.marker import adopted
 
     try:
         plot, args, kwargs = pickle.loads(job)
-        save(plot(*args, **kwargs), path)
+        with adopted(roots):
+            save(plot(*args, **kwargs), path)
         return None
     except Exception:
         traceback.print_exc()
@@ -384,7 +391,7 @@ class _Background:
         try:
             with warnings.catch_warnings():  # Python >= 3.12 warns of BLAS's idle threads
                 warnings.simplefilter("ignore", DeprecationWarning)
-                future = self.pool.submit(_worker_draw, job, path)
+                future = self.pool.submit(_worker_draw, job, path, active_roots())
         except BrokenProcessPool:
             _draw_here(plot, args, kwargs, path, "a figure process died")
             return
