@@ -146,3 +146,17 @@ def test_the_stamp_covers_every_compiled_module(tmp_path):
         assert _jit.sources_stamp(package) != before, rel
         f.write_text(text)
     assert _jit.sources_stamp(package) == before
+
+
+def test_the_warm_check_finds_the_loop_numba_wrote(tmp_path, monkeypatch):
+    """cache_is_warm() names the loop's real entry point: after one ascent it is True (a
+    renamed entry point would leave it False for ever, and the first-run note on every run)."""
+    import flexlift._jit as jit_module
+    from flexlift._jit import cache_is_warm
+    from flexlift.ascent import simulate
+    from flexlift.scenario import load_scenario
+
+    simulate(load_scenario("tanker"), duration=1.0)
+    assert cache_is_warm()
+    monkeypatch.setattr(jit_module, "_FOLDER", tmp_path)  # an empty cache folder
+    assert not cache_is_warm()

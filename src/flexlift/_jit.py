@@ -114,6 +114,15 @@ def cache_folder(stamp: str, bases: list[Path] | None = None) -> Path | None:
 _FOLDER = None if numba.config.DISABLE_JIT else cache_folder(sources_stamp())
 
 
+def cache_is_warm(entry: str = "kernel.advance") -> bool:
+    """Whether the compiled ``entry`` (module.function of the loop) is in this process's cache
+    folder, so that the first call loads it instead of compiling (about 30-60 s); True when
+    nothing is compiled (``NUMBA_DISABLE_JIT``) or nothing can be cached (nothing to say)."""
+    if numba.config.DISABLE_JIT or _FOLDER is None:
+        return True
+    return any(_FOLDER.glob(f"*/{entry}-*.nbi"))
+
+
 @contextlib.contextmanager
 def _numba_cache_dir(folder: Path):
     """numba's ``NUMBA_CACHE_DIR`` (``numba.config.CACHE_DIR``) set to ``folder`` within the

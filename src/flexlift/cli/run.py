@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+from flexlift._jit import cache_is_warm
 from flexlift.cli._common import add_scenario_arg, emit_json, scenario_from
 from flexlift.output import output_folder, write_json, write_text
 from flexlift.output.controllers import copy_controller_files
@@ -83,6 +84,11 @@ class Progress:
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
         self._last = -1
 
+    def note(self, text: str) -> None:
+        if not self.quiet:
+            self.stream.write(f"flexlift: {text}\n")
+            self.stream.flush()
+
     def stage(self, k: int, n: int, text: str) -> None:
         if not self.quiet:
             self.stream.write(f"[{k}/{n}] {text}\n")
@@ -110,6 +116,10 @@ def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
     out = args.out if args.out is not None else Path("flexlift-out") / scenario.name
     progress = Progress(quiet=args.quiet)
+    if not args.quiet and "simulate" in args.stages and not cache_is_warm():
+        progress.note("the ascent loop is compiled first (once after an install or a change "
+                      "to it; about 30-60 s on two cores; `python -m flexlift.cli.warm` does "
+                      "it ahead)")
     t0 = time.perf_counter()
     with output_folder(out, "run") as tmp:  # refuses folders flexlift did not write
         # the speed-ups of the whole process are the command's, not the library's: the heap
