@@ -123,9 +123,7 @@ def solve(hull: Hull, plan, lifts: dict, stiffness: float, q_el: np.ndarray,
     f = weight_vector(hull, q_el, point_weights) + bag_vector(hull, plan, lifts)
     wet = float(q_el.sum() * hull.element_length + point_weights.sum())
     net = float(sum(lifts.values()) - wet)
-    trib = np.full(n_nodes, hull.element_length)
-    trib[[0, -1]] *= 0.5
-    k_node = stiffness * trib
+    k_node = stiffness * tributary_lengths(hull.x_nodes)
     accel = (0.0, 0.0)
     if net >= -FLOAT_TOLERANCE * wet:
         u, accel = _inertia_relief(hull, K, f)
@@ -265,6 +263,19 @@ def _names(lifts: dict) -> str:
     return ", ".join(names[:8]) + (f", ... ({len(names)})" if len(names) > 8 else "")
 
 
+def tributary_lengths(x: np.ndarray) -> np.ndarray:
+    """Length of structure each node stands for [m]: half of each neighbouring element (the
+    end nodes half an element); they sum to the length."""
+    h = np.diff(np.asarray(x, dtype=float))
+    return np.r_[0.5 * h, 0.0] + np.r_[0.0, 0.5 * h]
+
+
+def contact_length(st: Statics) -> float:
+    """Length of structure on the seabed [m]: the tributary lengths of the nodes in contact
+    (every node in contact: the whole length)."""
+    return float(tributary_lengths(st.x)[st.contact].sum())
+
+
 def summary(st: Statics, g: float) -> dict:
     """The JSON summary (tonnes, metres, MN m, degrees)."""
     M, xm = st.peak_moment()
@@ -278,7 +289,7 @@ def summary(st: Statics, g: float) -> dict:
         "max_utilisation_x_m": float(st.x[i]),
         "lift_t": {k: v / (1e3 * g) for k, v in st.lifts.items()},
         "net_lift_t": st.net_force / (1e3 * g),
-        "contact_length_m": float(st.contact.sum() * (st.x[1] - st.x[0])),
+        "contact_length_m": contact_length(st),
         "floating": st.floating,
         "iterations": st.iterations,
         "warnings": list(st.warnings),
