@@ -68,3 +68,23 @@ def test_balance_check_and_layout_use_the_same_centre():
     assert c.ok, c.message
     assert f"centre of the wet weight {centre:.2f} m" in c.message
     assert np.isfinite(plan.lift_centroid)
+
+
+def test_floating_statics_relieve_with_the_water_moving_along():
+    """Lifts above the wet weight: the trawler (engine aft) hangs in its bags and the excess
+    accelerates the structure and the water moving with it (added mass), as in the ascent.
+    The moment closes at both ends, and differs from the structure-only relief."""
+    from pathlib import Path
+
+    from flexlift.physics.hydro import moving_water_per_length
+
+    sc = load_scenario(Path(__file__).parent / "data" / "trawler.yaml")
+    lifts = {"bag_1": 60.0, "bag_21": 60.0}
+    st = scenario_statics(sc, lifts)
+    assert st.floating and st.net_force > 0
+    peak = np.abs(st.moment).max()
+    assert abs(st.moment[0]) <= 1e-6 * peak and abs(st.moment[-1]) <= 1e-6 * peak
+    dry = scenario_statics(sc.with_changes(**{"hydro.added_mass_coefficient": 0.0}), lifts)
+    assert np.abs(dry.moment - st.moment).max() > 1e-3 * peak
+    water = moving_water_per_length(11.0, 1025.0, 1.0, 0.0, 60.0)
+    assert water == pytest.approx(1025.0 * np.pi * 11.0**2 / 4)
