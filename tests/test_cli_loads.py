@@ -190,3 +190,23 @@ def test_missing_scenario_and_bad_out(tmp_path, capsys):
     f.write_text("x")
     assert main(["loads", "--out", str(f)]) == 2
     assert "--out" in capsys.readouterr().err
+
+
+def test_report_puts_the_papers_table_in_the_appendix(tanker):
+    """The loads section shows the closed design cases; the paper's still-water table is in
+    the appendix at the end, labelled as the paper's, with its closing values."""
+    from pathlib import Path
+
+    from flexlift.output.report import render_report
+    from flexlift.scenario import load_scenario
+
+    html = render_report(tanker, [run_stage(tanker)])
+    loads, appendix = html.index('id="loads"'), html.index('id="appendix"')
+    assert loads < appendix
+    design = html.index("Longitudinal strength (design cases, each closed)")
+    paper = html.index("Appendix: the paper&#x27;s still-water case")
+    assert loads < design < appendix < paper
+    assert "<td>0.8361</td>" in html[paper:] and "<td>-44.3</td>" in html[paper:]
+    assert "<td>0.02143</td>" in html[paper:]
+    trawler = load_scenario(Path(__file__).parent / "data" / "trawler.yaml")
+    assert 'id="appendix"' not in render_report(trawler, [run_stage(trawler)])
