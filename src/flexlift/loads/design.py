@@ -175,11 +175,6 @@ def design_cases(plan, hull: Hull, mass_per_length, H0: float, stern_bow: tuple[
     return tuple(out)
 
 
-def governing(cases) -> DesignCase:
-    """The design case with the largest |M| (the table's peak)."""
-    return max(cases, key=lambda c: abs(c.strength.max_moment.value))
-
-
 def paper_case(plan, hull: Hull, per_element: int = 50) -> tuple[LoadCase, Strength]:
     """The paper's still-water case (SPEC §3): every bag at full lift against the breakout
     factor times W' distributed like the mass, integrated from the aft end and not closed;

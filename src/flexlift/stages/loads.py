@@ -13,7 +13,7 @@ from flexlift import constants as C
 from flexlift.ascent.checks import plan_checks, refuse_unworkable
 from flexlift.ascent.plant import coupled_plant
 from flexlift.ascent.result import section_modulus
-from flexlift.loads.design import DesignCase, design_cases, governing, paper_case
+from flexlift.loads.design import DesignCase, design_cases, paper_case
 from flexlift.loads.liftplan import LiftPlan, plan_lift
 from flexlift.loads.strength import Strength, lift_load_case
 from flexlift.output.stage import Figure, StageOutput, Table
@@ -45,8 +45,10 @@ def design(scenario, hull, plan, plant=None, per_element: int = 50):
 
 
 def still_water(scenario, hull, plan, per_element: int = 50):
-    """(closed load case, strength) of the governing design case (the largest |M|)."""
-    c = governing(design(scenario, hull, plan, per_element=per_element))
+    """(closed load case, strength) of the governing design case: the largest bending
+    utilisation (the largest |M| where the section modulus is uniform)."""
+    cases = design(scenario, hull, plan, per_element=per_element)
+    c = max(cases, key=lambda c: float(utilisation_along(scenario, c.strength).max()))
     return c.case, c.strength
 
 
