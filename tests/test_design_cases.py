@@ -207,3 +207,21 @@ def test_inertia_uses_the_mass_that_moves_in_water(setup):
     assert c.closure.moving_mass > 1.5 * hull.total_mass
     ratio = c.closure.pitch_acceleration / c_dry.closure.pitch_acceleration
     assert 0.05 < ratio < 0.7
+
+
+def test_holding_case_uses_the_lifts_the_ascent_holds():
+    """A staged pipeline flooded over its first 400 m: each stage's bags share their own
+    stretch's weight (the ascent's neutral volumes), not the whole line's equally; the holding
+    case takes those lifts and stays small (equal shares would bend it 16 MN m)."""
+    sc = load_scenario("pipeline").with_changes(**{
+        "pipe.segments": [{"from_m": 0.0, "to_m": 400.0, "contents": "flooded"}]})
+    hull = hull_from_scenario(sc)
+    plan = plan_lift(sc, hull)
+    plant = coupled_plant(sc, hull, plan)
+    hold = next(c for c in design(sc, hull, plan, plant, per_element=4) if c.name == "holding")
+    expect = plant.neutral_volume * sc.environment.seawater_density_kg_m3 * sc.environment.gravity_m_s2
+    np.testing.assert_allclose([hold.lifts[n] for n in plant.names], expect, rtol=1e-9)
+    assert np.ptp(expect) > 0.3 * expect.mean()  # the flooded stages hold more
+    st = hold.strength
+    assert abs(st.max_moment.value) < 0.5e6
+    assert abs(st.closing_moment) <= 1e-6 * abs(st.max_moment.value)

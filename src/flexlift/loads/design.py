@@ -145,7 +145,8 @@ def suction_load(length: float, H0: float, stern_bow: tuple[float, float]) -> Li
 
 
 def design_cases(plan, hull: Hull, mass_per_length, H0: float, stern_bow: tuple[float, float],
-                 pulls: dict, per_element: int = 50) -> tuple[DesignCase, ...]:
+                 pulls: dict, per_element: int = 50, holding: dict | None = None
+                 ) -> tuple[DesignCase, ...]:
     """The three design cases of :data:`CASES`, each closed by :func:`close`.
 
     plan : the :class:`~flexlift.loads.liftplan.LiftPlan`; hull : the beam it was laid on
@@ -154,10 +155,14 @@ def design_cases(plan, hull: Hull, mass_per_length, H0: float, stern_bow: tuple[
     H0 : the suction [N]; stern_bow : its holding shape's (stern, bow) ratios [-]
     pulls : the breakout pull of each external bag by name [N], shaped like the suction
     per_element : sample intervals per element for V and M
+    holding : each bag's holding lift by name [N], as the ascent holds it (a staged lift
+        shares the weight within each stage's stretch); default the plan's
+        :meth:`~flexlift.loads.liftplan.LiftPlan.holding_lifts`
     """
     ext = {b.name for b in plan.bags if b.kind == "external"}
     internal = sum(b.lift for b in plan.bags if b.kind == "internal")
-    holding = dict(zip([b.name for b in plan.bags], plan.holding_lifts().tolist()))
+    if holding is None:
+        holding = dict(zip([b.name for b in plan.bags], plan.holding_lifts().tolist()))
     pulled = {k: v + float(pulls.get(k, 0.0)) for k, v in holding.items()}
     full = {b.name: b.lift for b in plan.bags}
     suction = (suction_load(hull.length, H0, stern_bow),) if H0 > 0 else ()

@@ -117,10 +117,17 @@ class LoadCase:
         x = np.asarray(x, dtype=float)
         fa = np.broadcast_to(np.asarray(from_aft, dtype=bool), x.shape)
         q = np.zeros_like(x)
+        # on a sorted 1-D grid each load touches only the samples of its span (found by
+        # bisection): a structure of thousands of per-element loads costs O(samples), not
+        # O(samples x loads)
+        ordered = x.ndim == 1 and bool(np.all(np.diff(x) >= 0))
         for d in self.line_loads:
-            inside = np.where(fa, (x > d.x0) & (x <= d.x1), (x >= d.x0) & (x < d.x1))
-            t = (x - d.x0) / (d.x1 - d.x0)
-            q += np.where(inside, d.q0 + (d.q_end - d.q0) * t, 0.0)
+            lo, hi = ((int(np.searchsorted(x, d.x0, "left")), int(np.searchsorted(x, d.x1, "right")))
+                      if ordered else (0, x.size))
+            xs, fs = x.reshape(-1)[lo:hi], fa.reshape(-1)[lo:hi]
+            inside = np.where(fs, (xs > d.x0) & (xs <= d.x1), (xs >= d.x0) & (xs < d.x1))
+            t = (xs - d.x0) / (d.x1 - d.x0)
+            q.reshape(-1)[lo:hi] += np.where(inside, d.q0 + (d.q_end - d.q0) * t, 0.0)
         return q
 
     def mirrored(self) -> LoadCase:

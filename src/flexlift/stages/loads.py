@@ -31,8 +31,8 @@ def _extreme(e, scale: float) -> dict:
 def design(scenario, hull, plan, plant=None, per_element: int = 50):
     """The three closed design cases of the plan (:mod:`flexlift.loads.design`): the mass that
     accelerates in water is the structure plus the added mass and the entrained water, as the
-    ascent integrates it; the suction H_0, its shape and the shaped breakout pull are the
-    ascent's own."""
+    ascent integrates it; the holding lifts (the bags' neutral volumes), the suction H_0, its
+    shape and the shaped breakout pull are the ascent's own."""
     from flexlift.ascent.plant import wet_beam
     from flexlift.control.build import bag_pulls
 
@@ -40,8 +40,9 @@ def design(scenario, hull, plan, plant=None, per_element: int = 50):
     moving = hull.mass_per_length + wet_beam(scenario, hull)[1]
     ext = [n for n, e in zip(plant.names, plant.external) if e]
     pulls = dict(zip(ext, (bag_pulls(scenario, plant) * plant.arrays.rho_g).tolist()))
+    holding = dict(zip(plant.names, (plant.neutral_volume * plant.arrays.rho_g).tolist()))
     return design_cases(plan, hull, moving, float(plant.arrays.H0.sum()), plant.hold_stern_bow,
-                        pulls, per_element)
+                        pulls, per_element, holding)
 
 
 def still_water(scenario, hull, plan, per_element: int = 50):
