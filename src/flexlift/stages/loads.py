@@ -265,8 +265,8 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
     summary = summary_of(plan, hull, case_sums, _layout_text(scenario, plan), paper)
     checks = plan_checks(scenario, plant)
     summary["checks"] = {c.name: {"ok": c.ok, "message": c.message} for c in checks}
-    summary["static_stress"] = max((c["static_stress"] for c in case_sums.values()),
-                                   key=lambda s_: s_["max_utilisation"])
+    worst = max(case_sums, key=lambda n: case_sums[n]["static_stress"]["max_utilisation"])
+    summary["static_stress"] = {**case_sums[worst]["static_stress"], "case": worst}
     warnings = list(plan.warnings) + [f"{c.name}: {c.message}" for c in checks if not c.ok]
     tables = _tables(summary)
     tables.insert(2, _check_table(checks))
