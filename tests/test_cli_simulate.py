@@ -14,7 +14,7 @@ def test_simulate_json_short(capsys):
     assert KEYS <= set(out)
     assert out["control"] == "coordinated"
     assert set(out["criteria"]) == {"ascent_velocity", "descent_velocity", "pitch", "reached_target",
-                                    "no_surface_breach", "no_resettle"}
+                                    "no_surface_breach", "no_resettle", "bending_utilisation"}
     assert out["criteria"]["reached_target"] is False  # 200 s is far too short
     assert all(v is None for v in out["arrival_time_s"].values())
 

@@ -479,7 +479,7 @@ def test_a_sling_break_fault_removes_the_bag(plant):
     fault = {"kind": "sling_break", "bag": "bag_1", "time_s": 10.0}
     r = simulate(SC.with_changes(**QUICK, faults=[fault]), duration=20.0, plant=plant)
     ds = r.dataset
-    lift = ds.lift.sel(bag="bag_1").values
+    lift = ds.sling_force.sel(bag="bag_1").values  # the sling: 0 once broken
     t = ds.time.values
     assert np.all(lift[t < 10.0] > 1e6) and np.all(lift[t >= 10.0] == 0.0)
     V = ds.gas_volume.values[-1]

@@ -83,3 +83,46 @@ def test_csv_writer_writes_what_it_wrote_value_by_value(short):
     ds = short.dataset
     real = np.column_stack([ds.time.values, ds.heave.values, ds.height.values])
     assert _csv(["a"] * real.shape[1], real) == _csv_value_by_value(["a"] * real.shape[1], real)
+
+
+def test_buoyancy_and_sling_force_are_told_apart(short, tmp_path):
+    """``buoyancy`` is rho g V of the bag's gas; ``sling_force`` what its sling pulls on the
+    hull: the buoyancy less the drag while the bag rises (issue 23: once both were "lift")."""
+    ds = short.dataset
+    rho_g = 1025.0 * 9.81
+    np.testing.assert_allclose(ds.buoyancy.values, rho_g * ds.gas_volume.values, rtol=1e-12)
+    assert ds.buoyancy.attrs["units"] == "N" and "sling" in ds.sling_force.attrs["long_name"]
+    ext = ds.bag_kind.values == "external"
+    v = ds.ascent_velocity.values[:, ext]
+    B, S = ds.buoyancy.values[:, ext], ds.sling_force.values[:, ext]
+    rising = v > 0.05
+    assert rising.any() and np.all(S[rising] < B[rising])
+    held = np.abs(v) < 1e-9
+    assert held.any()
+    np.testing.assert_allclose(S[held], B[held], rtol=1e-9)
+    # written and read back with both names; an earlier file's "lift" is its sling force
+    back = load_netcdf(save_netcdf(short, tmp_path / "r.nc")).dataset
+    np.testing.assert_array_equal(back.buoyancy.values, ds.buoyancy.values)
+    old = ds.drop_vars("buoyancy").rename({"sling_force": "lift"})
+    old["bag_kind"] = old["bag_kind"].astype("S8")
+    old.to_netcdf(tmp_path / "old.nc", engine="scipy")
+    np.testing.assert_array_equal(load_netcdf(tmp_path / "old.nc").dataset.sling_force.values,
+                                  ds.sling_force.values)
+    head = to_csv(short, tmp_path, prefix="y")[0].read_text().splitlines()[0]
+    assert "sling_force_bag_1 [N]" in head and "buoyancy_bag_1 [N]" in head
+
+
+def test_bending_utilisation_is_a_lift_criterion(short):
+    """The dynamic bending utilisation over the ascent <= 1 is a lift criterion, with its cause
+    when it fails (here the tanker's hull given a 20 MPa allowable stress)."""
+    assert short.criteria["bending_utilisation"] is True
+    assert short.headline["max_utilisation"] < 1
+    sc = load_scenario("tanker").with_changes(**{"hull.allowable_stress_MPa": 20.0,
+                                                 "control.target_height_m": 20.0,
+                                                 "seabed.breakout_time_s": 60.0})
+    weak = simulate(sc, duration=300.0)
+    assert weak.criteria["bending_utilisation"] is False
+    u = weak.headline["max_utilisation"]
+    assert u > 1
+    why = weak.reasons["bending_utilisation"]
+    assert f"utilisation {u:.2f}" in why and "20 MPa" in why and "MN m" in why

@@ -38,7 +38,7 @@ def test_closed_loop_modes_meet_every_criterion(tanker_runs, mode):
     r = tanker_runs[mode]
     assert r.criteria == {k: True for k in
                           ("ascent_velocity", "descent_velocity", "pitch", "reached_target",
-                           "no_surface_breach", "no_resettle")}
+                           "no_surface_breach", "no_resettle", "bending_utilisation")}
     assert r.reasons == {}
     ds = r.dataset
     # every bag point ends within the tolerance of the 300 m target

@@ -104,17 +104,25 @@ def sequence_check(scenario, plant) -> Check:
     return Check("sequence", ok, msg)
 
 
-def balance_check(plant) -> Check:
-    """The bags' rated lift centroid against the centre of gravity of the wet weight."""
-    hull, plan = plant.hull, plant.plan
+def weight_centre(hull, g: float, rho_water: float, rho_steel: float) -> float:
+    """Where the submerged weight W' acts [m from the aft end]: each element's own wet weight
+    (its density: a pipe's coating and contents per element) and the point masses' (steel),
+    the centre the balanced layout puts the holding lifts on (:mod:`flexlift.loads.balance`)."""
     x_e = 0.5 * (hull.x_nodes[1:] + hull.x_nodes[:-1])
-    masses = np.concatenate([hull.mass_per_length * hull.element_length, hull.point_masses])
-    xs = np.concatenate([x_e, hull.x_nodes])
-    cg = float(masses @ xs / masses.sum())
+    w = np.concatenate([hull.wet_weight_per_length(g, rho_water, rho_steel) * hull.element_length,
+                        hull.point_wet_weights(g, rho_water, rho_steel)])
+    return float(w @ np.concatenate([x_e, hull.x_nodes]) / w.sum())
+
+
+def balance_check(plant) -> Check:
+    """The bags' holding-lift centroid against the centre of the wet weight (the centre the
+    layout balances on: :func:`weight_centre`)."""
+    hull, plan = plant.hull, plant.plan
+    cg = weight_centre(hull, plant.gravity, plant.seawater_density, plant.steel_density)
     e = plan.lift_centroid - cg
     moment = float(plan.holding_lifts().sum()) * e
     ok = abs(e) <= 0.01 * hull.length
-    msg = (f"lift centroid {plan.lift_centroid:.2f} m from the aft end, centre of gravity "
+    msg = (f"lift centroid {plan.lift_centroid:.2f} m from the aft end, centre of the wet weight "
            f"{cg:.2f} m: {e:+.2f} m ({100 * e / hull.length:+.2f} % of L), a static pitch moment "
            f"of {moment / 1e6:.1f} MN m")
     if not ok:

@@ -210,9 +210,9 @@ def wet_beam(scenario, hull: Hull):
     mass per length [kg/m]). The coupled plant integrates this beam's modes (the wet modes);
     the modal stage reports their frequencies beside the dry ones."""
     env, hy = scenario.environment, scenario.hydro
-    mass_line = (hydro.added_mass_per_length(hull.breadth, env.seawater_density_kg_m3,
-                                             hy.added_mass_coefficient)
-                 + hy.entrained_water_t * C.TONNE / hull.length)
+    mass_line = hydro.moving_water_per_length(hull.breadth, env.seawater_density_kg_m3,
+                                              hy.added_mass_coefficient,
+                                              hy.entrained_water_t * C.TONNE, hull.length)
     return assemble(hull, extra_mass_per_length=mass_line), mass_line
 
 

@@ -37,7 +37,8 @@ BAG_VARS = {
     "pitch_rate": ("rad/s", "rate of the local slope at the bag's point"),
     "net_flow": ("m3/s", "fill minus purge flow at local pressure"),
     "gas_volume": ("m3", "gas volume in the bag"),
-    "lift": ("N", "buoyancy of the bag acting on the hull"),
+    "sling_force": ("N", "force of the bag's sling on the hull: its buoyancy plus its drag, "
+                    "0 once detached"),
     "fill_rate": ("m3/s", "fill flow at local pressure"),
     "purge_opening": ("1", "purge valve opening"),
     "supervisor_output": ("1", "supervisory fuzzy controller output u"),
@@ -53,7 +54,7 @@ HULL_VARS = {
     "contact_force": ("N", "seabed contact force"),
 }
 CRITERIA = ("ascent_velocity", "descent_velocity", "pitch", "reached_target", "no_surface_breach",
-            "no_resettle")
+            "no_resettle", "bending_utilisation")
 EVENT_KINDS = {EV_LIMIT_DESCENT: "limit_descent_velocity", EV_SEPARATION: "separation", EV_BREAKOUT: "breakout", EV_ARRIVAL: "arrival",
                EV_TARGET_HELD: "target_held", EV_SURFACE_BREACH: "surface_breach",
                EV_LIMIT_VELOCITY: "limit_ascent_velocity", EV_LIMIT_PITCH: "limit_pitch",
@@ -172,6 +173,7 @@ def snapshots(run) -> dict:
 def build_result(run, error: str | None) -> Result:
     """The Dataset of a finished (or failed) run."""
     from flexlift.ascent.strength import seabed_profile, strength
+    from flexlift.physics.gas import buoyancy
 
     P, rec, R = run.plant, run.rec, run.R
     nrow = int(rec.counts[0])
@@ -181,6 +183,8 @@ def build_result(run, error: str | None) -> Result:
     data = {}
     for j, (name, (unit, long)) in enumerate(BAG_VARS.items()):
         data[name] = (("time", "bag"), rec.bag[:nrow, j, :].copy(), {"units": unit, "long_name": long})
+    data["buoyancy"] = (("time", "bag"), buoyancy(rec.bag[:nrow, 5, :], P.arrays.rho_g),
+                        {"units": "N", "long_name": "buoyancy of the bag's gas, rho g V"})
     for j, (name, (unit, long)) in enumerate(HULL_VARS.items()):
         data[name] = (("time",), rec.hull[:nrow, j].copy(), {"units": unit, "long_name": long})
     per_bag = {"bag_x": (P.x_point, "m", "bag point from the aft end"),
@@ -276,7 +280,10 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
             "pitch": float(np.degrees(pmax)) < sc.limits.pitch_deg,
             "reached_target": "target_held" in kinds,
             "no_surface_breach": "surface_breach" not in kinds,
-            "no_resettle": "resettle" not in kinds}
+            "no_resettle": "resettle" not in kinds,
+            # the dynamic hull girder stress over the ascent within the allowable (SPEC §10.3)
+            "bending_utilisation": not ("utilisation_max" in ds
+                                        and float(ds["utilisation_max"].max()) > 1.0)}
 
     def first(kind):
         return next((e["time_s"] for e in events if e["kind"] == kind), None)
@@ -301,11 +308,28 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
         "end_time_s": _r(float(t[-1]) if t.size else 0.0, 1),
     }
     reasons = explain(run, events, crit, vmax, vdown, pmax, error)
+    if not crit["bending_utilisation"]:
+        reasons["bending_utilisation"] = utilisation_reason(ds, sc)
     warnings = slope_warnings(ds, sc.limits.slope_validity_deg)
     ds.attrs.update(warnings=json.dumps(warnings),title=f"flexlift ascent of {sc.name}, {run.mode} control", scenario=sc.name,
                     scenario_checksum=sc.checksum(), control=run.mode, events=json.dumps(events),
                     criteria=json.dumps(crit), reasons=json.dumps(reasons), headline=json.dumps(headline), error=error or "",
                     max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax)
+
+
+def utilisation_reason(ds, sc) -> str:
+    """Why the bending utilisation failed: the largest stress, where and when, against the
+    allowable stress and the section modulus there."""
+    x = ds["x"].values
+    Z = section_modulus(sc, x)
+    u = np.abs(ds["bending_moment"].values) / Z[None, :] / (sc.hull.allowable_stress_MPa * 1e6)
+    k, j = np.unravel_index(int(np.argmax(u)), u.shape)
+    M = float(ds["bending_moment"].values[k, j])
+    return (f"the hull girder bending stress reached {abs(M) / Z[j] / 1e6:.0f} MPa at "
+            f"x = {x[j]:.1f} m at {float(ds['time_strength'].values[k]):.0f} s (M = "
+            f"{M / 1e6:.1f} MN m, Z = {Z[j]:.3g} m3): utilisation {float(u[k, j]):.2f} against "
+            f"the allowable {sc.hull.allowable_stress_MPa:g} MPa (hull.allowable_stress_MPa); "
+            "a stronger section, or lift points closer to where the weight is")
 
 
 def steepest(ds) -> dict:

@@ -1,5 +1,6 @@
 """``flexlift loads``: the lift plan (how much lift, how many bags, where) and the hull's
-shear force and bending moment under it, with the bags at full rated lift.
+shear force and bending moment under it in the three design cases (holding, breakout,
+full lift), each closed, and the paper's still-water table beside them for its layout.
 
 JSON values are in tonnes, metres, MN and MN m; nodes are numbered 1.. from the aft end.
 """
@@ -49,11 +50,22 @@ def _main(args) -> int:
                  if b["span_m"] is None
                  else f"span {b['span_m'][0]:.2f}..{b['span_m'][1]:.2f} m")
         w(f"    {b['name']:<8} {b['kind']:<8} {b['lift_t']:6.0f} t  {where}\n")
-    for label, key, unit in (("max |V|", "max_shear_MN", "MN"), ("max |M|", "max_moment_MNm", "MN m")):
-        e = s[key]
-        w(f"  {label} = {abs(e['value']):.3f} {unit} at x = {e['x_m']:.2f} m (node {e['node']})\n")
-    w(f"  closing at the bow: V = {s['closing_shear_MN']:.4f} MN, "
-      f"M = {s['closing_moment_MNm']:.4f} MN m\n")
+    for name, c in s["design_cases"].items():
+        m = c["max_moment_MNm"]
+        w(f"  {name:<9} scale {c['scale_factor']:.4f}, pitch acc. "
+          f"{c['pitch_acceleration_rad_s2']:+.2e} rad/s2: max |V| = "
+          f"{abs(c['max_shear_MN']['value']):.3f} MN, max |M| = {abs(m['value']):.3f} MN m at "
+          f"x = {m['x_m']:.2f} m (node {m['node']}), residual at the bow "
+          f"{c['residual_shear_MN']:.1e} MN, {c['residual_moment_MNm']:.1e} MN m\n")
+    p = s["max_moment_MNm"]
+    w(f"  peak |M| = {abs(p['value']):.3f} MN m ({p['case']} case)\n")
+    paper = s.get("paper_still_water")
+    if paper is not None:
+        w(f"  the paper's still-water case (not closed): max |V| = "
+          f"{abs(paper['max_shear_MN']['value']):.3f} MN at node {paper['max_shear_MN']['node']}, "
+          f"max |M| = {abs(paper['max_moment_MNm']['value']):.3f} MN m at node "
+          f"{paper['max_moment_MNm']['node']}, closing V = {paper['closing_shear_MN']:.4f} MN, "
+          f"M = {paper['closing_moment_MNm']:.4f} MN m\n")
     for msg in res.warnings:
         w(f"  WARNING: {msg}\n")
     if args.out is not None:

@@ -30,7 +30,7 @@ import numpy as np
 from flexlift.errors import InputError
 from flexlift.structure.beam import point_load_vector, shape_functions
 from flexlift.structure.hull import Hull
-from flexlift.structure.modes import Modes
+from flexlift.structure.modes import NEGATIVE_EIGENVALUE_TOL, Modes
 
 log = logging.getLogger(__name__)
 
@@ -439,8 +439,18 @@ def from_control(ss, rtol: float = 1e-9) -> ModalStateSpace:
     if not ok or np.any(omega2 < -rtol * scale):
         raise InputError("state space", f"{n} states",
                          "needs the modal form x = [q1, q1', ...] with blocks [0 1; -w^2 -2 zeta w]")
+    rigid = omega2 <= rtol * scale
+    flexible = omega2[~rigid]
+    w1 = float(flexible.min()) if flexible.size else scale  # omega_1^2, the lowest flexible
+    neg = np.flatnonzero(omega2 < -NEGATIVE_EIGENVALUE_TOL * w1)
+    if neg.size:  # a negative stiffness is not a rigid mode: never made one silently
+        k = int(neg[0])
+        raise InputError(f"state space mode {k + 1}", f"omega^2 = {omega2[k]:.3e} rad^2/s^2",
+                         f"a mode's omega^2 must not be negative (below -{NEGATIVE_EIGENVALUE_TOL:g} "
+                         f"omega_1^2 = {-NEGATIVE_EIGENVALUE_TOL * w1:.3e}): an unstable block is "
+                         "not a rigid mode")
     omega = np.sqrt(np.clip(omega2, 0.0, None))
-    omega[omega2 <= rtol * scale] = 0.0
+    omega[rigid] = 0.0
     c2 = -A[2 * i + 1, 2 * i + 1]
     if np.any(np.abs(c2[omega == 0]) > rtol * scale):
         raise InputError("state space", c2[omega == 0].tolist(), "rigid modes must be undamped")

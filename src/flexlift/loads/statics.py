@@ -12,7 +12,9 @@ When the lifts carry the whole wet weight (within :data:`FLOAT_TOLERANCE`) nothi
 structure on the seabed and there is no static equilibrium with contact: the structure hangs
 in its bags. Its shape is then the inertia-relief solution (the load less its rigid-body
 resultant, which would accelerate it; that resultant is reported) with the lowest point put
-on the seabed.
+on the seabed. The mass that accelerates is the structure's plus the water moving with it
+(added mass and entrained water, :func:`flexlift.physics.hydro.moving_water_per_length`), as
+in the ascent and the design cases of :mod:`flexlift.loads.design`.
 
 The suction of a buried structure is a breakout effect of the ascent, not part of these
 statics. Bending moment by statics of all the loads (:func:`flexlift.loads.strength.shear_moment`,
@@ -113,28 +115,27 @@ def bag_vector(hull: Hull, plan, lifts: dict) -> np.ndarray:
 
 def solve(hull: Hull, plan, lifts: dict, stiffness: float, q_el: np.ndarray,
           point_weights: np.ndarray, Z: np.ndarray, allowable: float,
-          slope_validity_deg: float) -> Statics:
+          slope_validity_deg: float, water_mass: float = 0.0) -> Statics:
     """The static state of ``hull`` under bag ``lifts`` [N by name] on a seabed of spring
     ``stiffness`` [N/m per m]; ``q_el`` wet weight per element [N/m], ``point_weights`` [N]
     per node, ``Z`` section modulus per element [m^3], ``allowable`` stress [Pa]; slopes
-    beyond ``slope_validity_deg`` (the small-deflection beam's validity) are warned about."""
+    beyond ``slope_validity_deg`` (the small-deflection beam's validity) are warned about;
+    ``water_mass`` [kg/m] the water accelerating with a floating structure."""
     n_nodes = hull.n_nodes
     K = assemble(hull).K.tocsc()
     f = weight_vector(hull, q_el, point_weights) + bag_vector(hull, plan, lifts)
     wet = float(q_el.sum() * hull.element_length + point_weights.sum())
     net = float(sum(lifts.values()) - wet)
-    trib = np.full(n_nodes, hull.element_length)
-    trib[[0, -1]] *= 0.5
-    k_node = stiffness * trib
+    k_node = stiffness * tributary_lengths(hull.x_nodes)
     accel = (0.0, 0.0)
     if net >= -FLOAT_TOLERANCE * wet:
-        u, accel = _inertia_relief(hull, K, f)
+        u, accel = _inertia_relief(hull, K, f, water_mass)
         active, iterations = np.zeros(n_nodes, dtype=bool), 0
     else:
         u, active, iterations = _active_set(K, f, k_node)
     w, th = u[0::2], u[1::2]
     reaction = np.where(active, -k_node * w, 0.0)
-    M = _moment(hull, q_el, point_weights, plan, lifts, reaction, accel)
+    M = _moment(hull, q_el, point_weights, plan, lifts, reaction, accel, water_mass)
     Zn = np.minimum(np.r_[Z[0], Z], np.r_[Z, Z[-1]])  # the weaker element at each node
     util = np.abs(M) / Zn / allowable
     return Statics(x=hull.x_nodes, w=w, slope=th, contact=active, reaction=reaction, moment=M,
@@ -171,12 +172,13 @@ def _active_set(K, f, k_node) -> tuple[np.ndarray, np.ndarray, int]:
                           "iterations")
 
 
-def _inertia_relief(hull: Hull, K, f) -> tuple[np.ndarray, tuple[float, float]]:
+def _inertia_relief(hull: Hull, K, f, water_mass: float = 0.0
+                    ) -> tuple[np.ndarray, tuple[float, float]]:
     """The free structure's elastic shape under ``f`` less its rigid-body resultant (the
     resultant shared by mass, as inertia), levelled and with its lowest node at w = 0; and
     the rigid accelerations (heave [m/s^2], pitch about the mid-length [rad/s^2]) that
-    resultant gives (structural mass only: the statics have no water moving with it)."""
-    M = assemble(hull).M.tocsc()
+    resultant gives to the structure and the ``water_mass`` [kg/m] moving with it."""
+    M = assemble(hull, extra_mass_per_length=water_mass).M.tocsc()
     x = hull.x_nodes
     R = np.zeros((2 * hull.n_nodes, 2))
     R[0::2, 0] = 1.0
@@ -193,11 +195,12 @@ def _inertia_relief(hull: Hull, K, f) -> tuple[np.ndarray, tuple[float, float]]:
     return u, (float(acc[0]), float(acc[1]))
 
 
-def _moment(hull, q_el, point_weights, plan, lifts, reaction, accel) -> np.ndarray:
+def _moment(hull, q_el, point_weights, plan, lifts, reaction, accel, water_mass=0.0
+            ) -> np.ndarray:
     x = hull.x_nodes
     xg = np.repeat(x, 2)[1:-1]  # each element's two ends: the weight is uniform on it
     a = accel[0] + accel[1] * (xg - x.mean())  # rigid acceleration of a floating structure
-    qg = -np.repeat(q_el, 2) - np.repeat(hull.mass_per_length, 2) * a
+    qg = -np.repeat(q_el, 2) - np.repeat(hull.mass_per_length + water_mass, 2) * a
     a_nodes = accel[0] + accel[1] * (x - x.mean())
     point = reaction - point_weights - hull.point_masses * a_nodes
     pts = [(float(xj), float(Fj)) for xj, Fj in zip(x, point) if Fj]
@@ -234,6 +237,7 @@ def scenario_statics(scenario, lifts_t: dict | None = None, hull: Hull | None = 
     from flexlift import constants as C
     from flexlift.errors import InputError
     from flexlift.loads.liftplan import plan_lift
+    from flexlift.physics.hydro import moving_water_per_length
     from flexlift.structure.hull import hull_from_scenario
 
     env = scenario.environment
@@ -255,14 +259,31 @@ def scenario_statics(scenario, lifts_t: dict | None = None, hull: Hull | None = 
         Z = Z[np.minimum((np.arange(hull.n_elements) + 0.5) / hull.n_elements * Z.size,
                          Z.size - 1).astype(int)]
     k = scenario.seabed.contact_stiffness_N_m2 if stiffness is None else stiffness
+    hy = scenario.hydro
+    water = moving_water_per_length(hull.breadth, rho, hy.added_mass_coefficient,
+                                    hy.entrained_water_t * C.TONNE, hull.length)
     return solve(hull, plan, lifts, k, hull.wet_weight_per_length(g, rho, rho_s),
                  hull.point_wet_weights(g, rho, rho_s), Z,
-                 scenario.hull.allowable_stress_MPa * 1e6, scenario.limits.slope_validity_deg)
+                 scenario.hull.allowable_stress_MPa * 1e6, scenario.limits.slope_validity_deg,
+                 water)
 
 
 def _names(lifts: dict) -> str:
     names = list(lifts)
     return ", ".join(names[:8]) + (f", ... ({len(names)})" if len(names) > 8 else "")
+
+
+def tributary_lengths(x: np.ndarray) -> np.ndarray:
+    """Length of structure each node stands for [m]: half of each neighbouring element (the
+    end nodes half an element); they sum to the length."""
+    h = np.diff(np.asarray(x, dtype=float))
+    return np.r_[0.5 * h, 0.0] + np.r_[0.0, 0.5 * h]
+
+
+def contact_length(st: Statics) -> float:
+    """Length of structure on the seabed [m]: the tributary lengths of the nodes in contact
+    (every node in contact: the whole length)."""
+    return float(tributary_lengths(st.x)[st.contact].sum())
 
 
 def summary(st: Statics, g: float) -> dict:
@@ -278,7 +299,7 @@ def summary(st: Statics, g: float) -> dict:
         "max_utilisation_x_m": float(st.x[i]),
         "lift_t": {k: v / (1e3 * g) for k, v in st.lifts.items()},
         "net_lift_t": st.net_force / (1e3 * g),
-        "contact_length_m": float(st.contact.sum() * (st.x[1] - st.x[0])),
+        "contact_length_m": contact_length(st),
         "floating": st.floating,
         "iterations": st.iterations,
         "warnings": list(st.warnings),

@@ -218,9 +218,22 @@ def _stage_sections(stages: list[StageOutput]) -> list[str]:
         if s.warnings:
             parts.append(f'<p class="meta">{len(s.warnings)} warning(s): see '
                          '<a href="#warnings">Warnings</a>.</p>')
-        parts += [_table(t) for t in s.tables]
+        parts += [_table(t) for t in s.tables if not _appendix(t)]
         parts += [_figure(f) for f in s.figures]
     return parts
+
+
+def _appendix(t) -> bool:
+    """A table that belongs to the appendix (its title says so: e.g. the paper's still-water
+    strength table, kept for comparison beside the design cases)."""
+    return t.title.startswith("Appendix")
+
+
+def _appendix_section(stages: list[StageOutput]) -> list[str]:
+    tables = [t for s in stages for t in s.tables if _appendix(t)]
+    if not tables:
+        return []
+    return ['<h2 id="appendix">Appendix</h2>'] + [_table(t) for t in tables]
 
 
 def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
@@ -261,5 +274,6 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         parts += ['<h2 id="warnings">Warnings</h2>'] + [
             f'<div class="warn"><b>{_e(name)}:</b> {_e(w)}</div>' for name, w in warnings]
     parts += _stage_sections(stages)
+    parts += _appendix_section(stages)
     parts.append("</body></html>")
     return "\n".join(p for p in parts if p)

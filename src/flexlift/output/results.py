@@ -29,12 +29,17 @@ def save_netcdf(result: Result, path) -> Path:
 
 
 def load_netcdf(path) -> Result:
-    """Read a result written by :func:`save_netcdf`."""
+    """Read a result written by :func:`save_netcdf` (a file of an earlier version, whose
+    ``lift`` held the sling force, is read with it named ``sling_force``)."""
     with xr.open_dataset(path, engine="scipy") as ds:
         ds = ds.load()
     for name in ("bag", "bag_kind"):
         if ds[name].dtype.kind == "S":
             ds[name] = ds[name].astype(str)
+    if "lift" in ds and "sling_force" not in ds:
+        # written before the two were told apart: "lift" held the sling force
+        ds = ds.rename({"lift": "sling_force"})
+        ds["sling_force"].attrs.update(units="N", long_name=BAG_VARS["sling_force"][1])
     return Result(ds)
 
 
@@ -50,7 +55,7 @@ def to_csv(result: Result, folder, prefix: str = "simulate") -> list[Path]:
     for name in HULL_VARS:
         cols.append(f"{name} [{ds[name].attrs['units']}]")
         arrays.append(ds[name].values)
-    for name in BAG_VARS:
+    for name in [*BAG_VARS, *(["buoyancy"] if "buoyancy" in ds else [])]:
         for k, b in enumerate(ds.bag.values):
             cols.append(f"{name}_{b} [{ds[name].attrs['units']}]")
             arrays.append(ds[name].values[:, k])

@@ -47,6 +47,15 @@ def added_mass_per_length(breadth: float, rho: float, ca: float = 1.0) -> float:
     return ca * rho * math.pi * breadth**2 / 4.0
 
 
+def moving_water_per_length(breadth: float, rho: float, ca: float, entrained: float,
+                            length: float) -> float:
+    """The water that accelerates with the hull, per length [kg/m]: the added mass
+    :func:`added_mass_per_length` (breadth B [m], rho [kg/m^3], C_a [-]) plus the
+    ``entrained`` water of flooded compartments [kg] spread over the ``length`` [m]. With the
+    structure's own mass it is the mass the ascent integrates and the statics relieve."""
+    return added_mass_per_length(breadth, rho, ca) + entrained / length
+
+
 def sphere_diameter(volume):
     """Diameter [m] of a sphere of ``volume`` [m^3]."""
     return (6.0 * np.asarray(volume, dtype=float) / math.pi) ** (1.0 / 3.0)

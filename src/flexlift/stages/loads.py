@@ -13,8 +13,9 @@ from flexlift import constants as C
 from flexlift.ascent.checks import plan_checks, refuse_unworkable
 from flexlift.ascent.plant import coupled_plant
 from flexlift.ascent.result import section_modulus
+from flexlift.loads.design import DesignCase, design_cases, paper_case
 from flexlift.loads.liftplan import LiftPlan, plan_lift
-from flexlift.loads.strength import Strength, balanced_case, lift_load_case, strength
+from flexlift.loads.strength import Strength, lift_load_case
 from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.plumbing.atomic import write_text
 from flexlift.structure.hull import hull_from_scenario
@@ -27,15 +28,29 @@ def _extreme(e, scale: float) -> dict:
     return {"value": e.value / scale, "x_m": e.x, "node": e.node}
 
 
+def design(scenario, hull, plan, plant=None, per_element: int = 50):
+    """The three closed design cases of the plan (:mod:`flexlift.loads.design`): the mass that
+    accelerates in water is the structure plus the added mass and the entrained water, as the
+    ascent integrates it; the holding lifts (the bags' neutral volumes), the suction H_0, its
+    shape and the shaped breakout pull are the ascent's own."""
+    from flexlift.ascent.plant import wet_beam
+    from flexlift.control.build import bag_pulls
+
+    plant = plant or coupled_plant(scenario, hull, plan)
+    moving = hull.mass_per_length + wet_beam(scenario, hull)[1]
+    ext = [n for n, e in zip(plant.names, plant.external) if e]
+    pulls = dict(zip(ext, (bag_pulls(scenario, plant) * plant.arrays.rho_g).tolist()))
+    holding = dict(zip(plant.names, (plant.neutral_volume * plant.arrays.rho_g).tolist()))
+    return design_cases(plan, hull, moving, float(plant.arrays.H0.sum()), plant.hold_stern_bow,
+                        pulls, per_element, holding)
+
+
 def still_water(scenario, hull, plan, per_element: int = 50):
-    """(load case, strength) of the plan in still water: bags at full lift against the weight
-    times the breakout factor; a pipeline's case closed first
-    (:func:`~flexlift.loads.strength.balanced_case`: over its length any imbalance would dwarf
-    its moments; the ship's stays the paper's, with its published closing values)."""
-    case = lift_load_case(plan, hull)
-    if scenario.pipe is not None:
-        case = balanced_case(case, {b.name for b in plan.bags})
-    return case, strength(case, hull, per_element)
+    """(closed load case, strength) of the governing design case: the largest bending
+    utilisation (the largest |M| where the section modulus is uniform)."""
+    cases = design(scenario, hull, plan, per_element=per_element)
+    c = max(cases, key=lambda c: float(utilisation_along(scenario, c.strength).max()))
+    return c.case, c.strength
 
 
 def utilisation_along(scenario, st: Strength) -> np.ndarray:
@@ -53,12 +68,44 @@ def stress_of(scenario, st: Strength) -> dict:
             "allowable_MPa": allow, "max_utilisation": float(sigma[k] / 1e6 / allow)}
 
 
-def summary_of(plan: LiftPlan, hull, st: Strength, layout: str) -> dict:
-    """The JSON summary (tonnes, m, MN, MN m; nodes 1-based)."""
+def _strength_of(st: Strength) -> dict:
+    return {"max_shear_MN": _extreme(st.max_shear, 1e6),
+            "max_moment_MNm": _extreme(st.max_moment, 1e6),
+            "max_sagging_MNm": _extreme(st.max_sagging, 1e6),
+            "max_hogging_MNm": _extreme(st.max_hogging, 1e6)}
+
+
+def case_summary(scenario, c: DesignCase, g: float) -> dict:
+    """One closed design case in the JSON summary (tonnes, MN, MN m, m/s^2, rad/s^2)."""
+    st, cl = c.strength, c.closure
+    down = -sum(d.resultant for d in c.case.line_loads
+                if d.resultant < 0 and not d.name.startswith("inertia")) - sum(
+        p.force for p in c.case.point_loads if p.force < 0 and not p.name.startswith("inertia"))
+    return {"title": c.title, "scale_factor": cl.scale,
+            "heave_acceleration_m_s2": cl.heave_acceleration,
+            "pitch_acceleration_rad_s2": cl.pitch_acceleration,
+            "centre_of_moving_mass_m": cl.centre, "moving_mass_t": cl.moving_mass / C.TONNE,
+            "load_t": down / (C.TONNE * g), "lift_t": sum(c.lifts.values()) / (C.TONNE * g),
+            **_strength_of(st),
+            "residual_shear_MN": st.closing_shear / 1e6,
+            "residual_moment_MNm": st.closing_moment / 1e6,
+            "static_stress": stress_of(scenario, st)}
+
+
+def summary_of(plan: LiftPlan, hull, cases: dict, layout: str, paper: Strength | None) -> dict:
+    """The JSON summary (tonnes, m, MN, MN m; nodes 1-based): the plan, the closed design
+    cases (``design_cases``) and their peaks (``max_*``, each naming its ``case``), the
+    residuals at the bow (largest of the cases) and the paper's still-water case when the
+    plan is laid out by the paper's rule (``paper_still_water``, not closed)."""
     t = C.TONNE * plan.gravity
     ext, internal = plan.external, plan.internal
     span = [min(b.span[0] for b in internal), max(b.span[1] for b in internal)] if internal else None
-    return {
+
+    def largest(key, sign):
+        name = max(cases, key=lambda n: sign(cases[n][key]["value"]))
+        return {**cases[name][key], "case": name}
+
+    out = {
         "dry_weight_t": plan.dry_weight / t,
         "wet_weight_t": plan.wet_weight / t,
         "breakout_factor": plan.breakout_factor,
@@ -83,17 +130,43 @@ def summary_of(plan: LiftPlan, hull, st: Strength, layout: str) -> dict:
             }
             for b in plan.bags
         ],
-        "max_shear_MN": _extreme(st.max_shear, 1e6),
-        "max_moment_MNm": _extreme(st.max_moment, 1e6),
-        "max_sagging_MNm": _extreme(st.max_sagging, 1e6),
-        "max_hogging_MNm": _extreme(st.max_hogging, 1e6),
-        "closing_shear_MN": st.closing_shear / 1e6,
-        "closing_moment_MNm": st.closing_moment / 1e6,
-        "samples": int(st.x.size),
+        "design_cases": cases,
+        "max_shear_MN": largest("max_shear_MN", abs),
+        "max_moment_MNm": largest("max_moment_MNm", abs),
+        "max_sagging_MNm": largest("max_sagging_MNm", lambda v: v),
+        "max_hogging_MNm": largest("max_hogging_MNm", lambda v: -v),
+        "closing_shear_MN": max((c["residual_shear_MN"] for c in cases.values()), key=abs),
+        "closing_moment_MNm": max((c["residual_moment_MNm"] for c in cases.values()), key=abs),
+        "samples": int(max(c["samples"] for c in cases.values())) if cases else 0,
         "lift_centroid_m": plan.lift_centroid,
         "lift_points": [{"x_m": x, "bags": names} for x, names in plan.lift_points()],
         "warnings": list(plan.warnings),
     }
+    if paper is not None:
+        out["paper_still_water"] = {**_strength_of(paper),
+                                    "closing_shear_MN": paper.closing_shear / 1e6,
+                                    "closing_moment_MNm": paper.closing_moment / 1e6}
+    return out
+
+
+#: the rows of the design-case table: (label, unit, getter of a case summary)
+_ROWS = (
+    ("lift scale factor", "-", lambda c: c["scale_factor"]),
+    ("heave acceleration (inertia relief)", "m/s2", lambda c: c["heave_acceleration_m_s2"]),
+    ("pitch acceleration (inertia relief)", "rad/s2", lambda c: c["pitch_acceleration_rad_s2"]),
+    ("load (down) / lift (up)", "t", lambda c: f"{c['load_t']:.1f} / {c['lift_t']:.1f}"),
+    ("max |V|", "MN", lambda c: c["max_shear_MN"]["value"]),
+    ("  at x", "m", lambda c: c["max_shear_MN"]["x_m"]),
+    ("max |M|", "MN m", lambda c: c["max_moment_MNm"]["value"]),
+    ("  at x", "m", lambda c: c["max_moment_MNm"]["x_m"]),
+    ("  nearest node", "-", lambda c: c["max_moment_MNm"]["node"]),
+    ("max sagging M", "MN m", lambda c: c["max_sagging_MNm"]["value"]),
+    ("max hogging M", "MN m", lambda c: c["max_hogging_MNm"]["value"]),
+    ("residual V at the bow", "MN", lambda c: c["residual_shear_MN"]),
+    ("residual M at the bow", "MN m", lambda c: c["residual_moment_MNm"]),
+    ("max bending stress |M|/Z", "MPa", lambda c: c["static_stress"]["max_MPa"]),
+    ("utilisation", "-", lambda c: c["static_stress"]["max_utilisation"]),
+)
 
 
 def _tables(summary: dict) -> list[Table]:
@@ -115,30 +188,43 @@ def _tables(summary: dict) -> list[Table]:
             f"{summary['bag_count']} bags carry {summary['total_lift_t']:.0f} t ({summary['layout']})."
         ),
     )
-    rows = []
-    for label, key, unit in (
-        ("max |V|", "max_shear_MN", "MN"),
-        ("max |M|", "max_moment_MNm", "MN m"),
-        ("max sagging M", "max_sagging_MNm", "MN m"),
-        ("max hogging M", "max_hogging_MNm", "MN m"),
-    ):
-        e = summary[key]
-        rows.append([label, e["value"], unit, e["x_m"], e["node"]])
-    rows.append(["closing V at the bow", summary["closing_shear_MN"], "MN", None, None])
-    rows.append(["closing M at the bow", summary["closing_moment_MNm"], "MN m", None, None])
+    cases = summary["design_cases"]
+    peak = summary["max_moment_MNm"]
     st = Table(
-        "Longitudinal strength (still water, bags at full lift)",
-        ["quantity", "value", "unit", "x [m]", "node"],
-        rows,
+        "Longitudinal strength (design cases, each closed)",
+        ["quantity", "unit"] + [n.replace("_", "-") for n in cases],
+        [[label, unit] + [get(c) for c in cases.values()] for label, unit, get in _ROWS],
         note=(
-            "Statics of the free beam integrated from the aft end on "
-            f"{summary['samples']} samples; M sagging positive. The closing values measure "
-            "the imbalance of the load case (bag lift rounded up to the tonne); a pipeline's "
-            "case is closed first (the bags' lifts scaled to the load, a linear trim load "
-            "for the rest of the moment): over its length any imbalance would dwarf its moments."
+            "Holding: W' against the holding lifts; breakout: W' + H0 in the suction's shape "
+            "against the holding lifts plus the shaped pull; full-lift: every bag at full "
+            "capacity against W' + H0. Each closed physically: the external bags' lifts scaled "
+            "to carry the load (the factor), the remaining moment carried by rigid-body "
+            "inertia relief of the mass that moves in water (structure, added mass, entrained "
+            "water); no trim load. Statics of the free beam integrated from the aft end, "
+            f"M sagging positive; the residuals at the bow measure the closure. Peak |M| "
+            f"{abs(peak['value']):.4g} MN m in the {peak['case'].replace('_', '-')} case at "
+            f"x = {peak['x_m']:.2f} m."
         ),
     )
-    return [bags, st]
+    tables = [bags, st]
+    paper = summary.get("paper_still_water")
+    if paper is not None:
+        rows = [[label, paper[key]["value"], unit, paper[key]["x_m"], paper[key]["node"]]
+                for label, key, unit in (("max |V|", "max_shear_MN", "MN"),
+                                         ("max |M|", "max_moment_MNm", "MN m"),
+                                         ("max sagging M", "max_sagging_MNm", "MN m"),
+                                         ("max hogging M", "max_hogging_MNm", "MN m"))]
+        rows.append(["closing V at the bow", paper["closing_shear_MN"], "MN", None, None])
+        rows.append(["closing M at the bow", paper["closing_moment_MNm"], "MN m", None, None])
+        tables.append(Table(
+            "Appendix: the paper's still-water case (bags at full lift, not closed)",
+            ["quantity", "value", "unit", "x [m]", "node"], rows,
+            note=(f"As the paper computes it: every bag at full lift against "
+                  f"{summary['breakout_factor']:g} W' distributed like the mass, integrated from "
+                  "the aft end and not closed; the closing values at the bow are the imbalance of "
+                  "that load case (bag lift rounded up to the tonne). For comparison only: the "
+                  "design cases above are the ones to sign.")))
+    return tables
 
 
 def _check_table(checks) -> Table:
@@ -167,19 +253,23 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
     """
     hull = hull_from_scenario(scenario)
     plan = plan_lift(scenario, hull)
-    case, st = still_water(scenario, hull, plan, per_element)
-    summary = summary_of(plan, hull, st, _layout_text(scenario, plan))
     plant = coupled_plant(scenario, hull, plan)
     refuse_unworkable(scenario, plant)
+    cases = design(scenario, hull, plan, plant, per_element)
+    g = plan.gravity
+    case_sums = {c.name: {**case_summary(scenario, c, g), "samples": int(c.strength.x.size)}
+                 for c in cases}
+    paper = None
+    if plan.layout == "mode_nodes" and scenario.pipe is None:
+        paper = paper_case(plan, hull, per_element)[1]
+    summary = summary_of(plan, hull, case_sums, _layout_text(scenario, plan), paper)
     checks = plan_checks(scenario, plant)
     summary["checks"] = {c.name: {"ok": c.ok, "message": c.message} for c in checks}
-    summary["static_stress"] = stress_of(scenario, st)
+    worst = max(case_sums, key=lambda n: case_sums[n]["static_stress"]["max_utilisation"])
+    summary["static_stress"] = {**case_sums[worst]["static_stress"], "case": worst}
     warnings = list(plan.warnings) + [f"{c.name}: {c.message}" for c in checks if not c.ok]
-    tables = _tables(summary) + [_check_table(checks)]
-    s_ = summary["static_stress"]
-    tables[1].rows.append(["max bending stress |M|/Z", s_["max_MPa"], "MPa", s_["x_m"], None])
-    tables[1].rows.append(["utilisation (allowable "
-                           f"{s_['allowable_MPa']:g} MPa)", s_["max_utilisation"], "-", s_["x_m"], None])
+    tables = _tables(summary)
+    tables.insert(2, _check_table(checks))
     figures: list[Figure] = []
     if out is not None:
         from flexlift.output.plots._style import draw
@@ -189,21 +279,26 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
         fdir, tdir = out / "figures", out / "tables"
         figures.append(
             Figure(
-                draw(fdir / "loads_diagram.png", load_diagram, hull, plan, case),
-                "Lift plan: external bags at their nodes, internal bags over their spans, "
+                draw(fdir / "loads_diagram.png", load_diagram, hull, plan,
+                     lift_load_case(plan, hull)),
+                "Lift plan: external bags at their lift points, internal bags over their spans, "
                 "weight plus breakout as a distributed downward load.",
             )
         )
         figures.append(
             Figure(
-                draw(fdir / "loads_shear_moment.png", shear_moment_figure, st, hull, plan),
-                "Shear force and bending moment along the hull with the bags at full lift; "
-                "maxima marked, sagging positive.",
+                draw(fdir / "loads_shear_moment.png", shear_moment_figure,
+                     [(c.name.replace("_", "-"), c.strength) for c in cases], hull, plan),
+                "Shear force and bending moment along the hull in the three design cases, each "
+                "closed (lifts scaled to the load, inertia relief for the rest of the moment); "
+                "the peak marked, sagging positive.",
             )
         )
         write_text(tdir / "loads_bags.csv", tables[0].to_csv())
         write_text(tdir / "loads_strength.csv", tables[1].to_csv())
         write_text(tdir / "loads_checks.csv", tables[2].to_csv())
+        if paper is not None:
+            write_text(tdir / "loads_paper_still_water.csv", tables[3].to_csv())
     criteria = {"static_stress_within_allowable": summary["static_stress"]["max_utilisation"] <= 1.0}
     return StageOutput(name=NAME, summary=summary, figures=figures, tables=tables,
                        warnings=warnings, criteria=criteria)

@@ -18,7 +18,8 @@ MODES = typing.get_args(ControlMode)
 
 def static_view(scenario) -> dict:
     """What the seabed figure of a long structure adds to the ascent: the slope validity [deg]
-    and the still-water utilisation along it (``x`` [m], ``utilisation`` [-])."""
+    and the utilisation along it in the governing static design case of the loads stage
+    (``x`` [m], ``utilisation`` [-])."""
     from flexlift.loads.liftplan import plan_lift
     from flexlift.stages.loads import still_water, utilisation_along
     from flexlift.structure.hull import hull_from_scenario
@@ -59,7 +60,7 @@ def _write(result, out: Path, mode: str, primary: bool, seabed: dict | None = No
                            f"the touchdown points), the largest slope along it against the "
                            f"small-deflection beam's validity, {window}, and the bending-stress "
                            f"utilisation along it: its envelope over the lift ({mode} control) "
-                           f"and in still water with the bags at full lift (the loads stage)."))
+                           f"and in the governing static design case (the loads stage)."))
     return figs
 
 

@@ -12,7 +12,7 @@ import contextlib
 import hashlib
 import logging
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
@@ -44,6 +44,9 @@ class Modes:
     n_rigid : int — number of rigid modes (2 for a free-free beam)
     n_requested : int — modes asked for, rigid included; ``n_modes`` (those returned) is
         smaller when the solver could not resolve the highest ones to SPEC section 2 [-]
+    diagnostics : dict — what the solve had to correct: ``clipped_eigenvalues``, a list of
+        (flexible mode number 1.., omega^2 [rad^2/s^2]) of round-off negatives set to 0
+        (:data:`NEGATIVE_EIGENVALUE_TOL`)
     """
 
     omega: np.ndarray
@@ -51,6 +54,7 @@ class Modes:
     hull: Hull
     n_rigid: int = 2
     n_requested: int | None = None
+    diagnostics: dict = field(default_factory=dict)
 
     @property
     def n_modes(self) -> int:
@@ -137,6 +141,33 @@ def _dense_flexible(beam: Beam, R: np.ndarray, n_flex: int) -> tuple[np.ndarray,
     Mc = 0.5 * (Mc + Mc.T)
     lam, y = sla.eigh(Kc, Mc, subset_by_index=[0, n_flex - 1])
     return lam, Q @ y
+
+
+#: a flexible eigenvalue below -NEGATIVE_EIGENVALUE_TOL omega_1^2 is a failed solve (raised);
+#: a negative one above it is round-off, clipped to 0 and recorded in the modes' diagnostics
+NEGATIVE_EIGENVALUE_TOL = 1e-8
+
+
+def checked_omega(lam: np.ndarray, what: str = "modes") -> tuple[np.ndarray, list]:
+    """sqrt of the flexible eigenvalues ``lam`` = omega^2 [rad^2/s^2], never turning a
+    negative one into a zero-frequency mode silently: below -:data:`NEGATIVE_EIGENVALUE_TOL`
+    omega_1^2 (omega_1^2 the lowest positive one) a :class:`~flexlift.errors.SimulationError`
+    names the mode; above it the value is clipped to 0 and returned in the list of
+    (flexible mode number 1.., omega^2) for the diagnostics."""
+    lam = np.asarray(lam, dtype=float)
+    pos = lam[lam > 0]
+    ref = float(pos.min()) if pos.size else float(np.abs(lam).max(initial=0.0))
+    bad = np.flatnonzero(lam < -NEGATIVE_EIGENVALUE_TOL * ref)
+    if bad.size:
+        k = int(bad[0])
+        raise SimulationError(
+            f"{what}: flexible mode {k + 1} has a negative eigenvalue omega^2 = {lam[k]:.3e} "
+            f"rad^2/s^2 (below -{NEGATIVE_EIGENVALUE_TOL:g} omega_1^2 = "
+            f"{-NEGATIVE_EIGENVALUE_TOL * ref:.3e}): the stiffness is not positive on the "
+            "flexible modes or the eigen solve lost accuracy; check the stiffness and masses, "
+            "or use fewer elements or solver='dense'")
+    clipped = [(int(k) + 1, float(lam[k])) for k in np.flatnonzero(lam < 0)]
+    return np.sqrt(np.clip(lam, 0.0, None)), clipped
 
 
 #: with ``n_modes=None``, models above this many elements get the lowest DEFAULT_LARGE_MODES
@@ -256,9 +287,14 @@ def _compute_modes(beam: Beam, n_modes: int | None, solver: str) -> Modes:
     sign = np.sign(V[-2])
     sign[sign == 0] = 1.0
     V = V * sign
-    omega = np.concatenate([[0.0, 0.0], np.sqrt(np.clip(lam, 0.0, None))])
+    flex, clipped = checked_omega(lam)
+    if clipped:
+        log.warning("modes: %d flexible eigenvalue(s) slightly negative by round-off, set to 0: "
+                    "%s", len(clipped), clipped[:3])
+    omega = np.concatenate([[0.0, 0.0], flex])
     return Modes(omega=omega, phi=np.column_stack([R, V]), hull=beam.hull, n_rigid=2,
-                 n_requested=n_modes)
+                 n_requested=n_modes,
+                 diagnostics={"clipped_eigenvalues": clipped} if clipped else {})
 
 
 def zero_crossings(modes: Modes, column: int, samples_per_element: int | None = None) -> np.ndarray:

@@ -148,7 +148,7 @@ def seabed_and_stress(result, validity_deg: float, x=None, utilisation=None):
     """A long structure's lift: where it lies on the seabed in time (the touchdown points),
     its largest slope in time against the small-deflection beam's validity, and the
     bending-stress utilisation along it: the envelope over the lift and, given ``x`` [m] and
-    ``utilisation`` [-], the still-water case of the loads stage."""
+    ``utilisation`` [-], the governing static design case of the loads stage."""
     ds = result.dataset
     ts = ds.time_strength.values
     t0, t1 = zoom_window(result)
@@ -173,7 +173,7 @@ def seabed_and_stress(result, validity_deg: float, x=None, utilisation=None):
     top = float(ds.utilisation_max.values.max())
     a3.plot(ds.x.values, ds.utilisation_max.values, label="envelope over the lift")
     if x is not None:
-        a3.plot(x, utilisation, color="C2", lw=1, label="still water, bags at full lift")
+        a3.plot(x, utilisation, color="C2", lw=1, label="static design case (the loads stage)")
         top = max(top, float(np.max(utilisation)))
     a3.axhline(1.0, color="C3", ls="--", lw=1, label="allowable")
     a3.set(xlabel="x along the structure [m]", ylabel="utilisation σ / σ_allow [-]",

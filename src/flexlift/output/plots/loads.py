@@ -217,24 +217,37 @@ def load_diagram(hull, plan, case=None):
     return fig
 
 
-def shear_moment_figure(st, hull, plan=None):
-    """Shear force [MN] and bending moment [MN m] along the hull, extremes marked.
+#: colours of the design cases' curves, in order
+_CASE_COLOURS = (_HULL, "#d68910", _EXT, "#7d3c98")
 
-    st : :class:`~flexlift.loads.strength.Strength`; hull : the beam; plan : optional, to mark bags
+
+def shear_moment_figure(st, hull, plan=None):
+    """Shear force [MN] and bending moment [MN m] along the hull, the peak marked.
+
+    st : a :class:`~flexlift.loads.strength.Strength`, or a sequence of (label, Strength), one
+        per design case, drawn together (the peak marked is the largest over them)
+    hull : the beam; plan : optional, to mark bags
     """
+    curves = [("", st)] if not isinstance(st, (list, tuple)) else list(st)
     fig, (ax1, ax2) = new_figure(2, 1, sharex=True, figsize=(8.5, 5.8), margins={"top": 0.85})
-    x = st.x
     scale = 1e6
-    for ax, y, ext, unit, label, sym in (
-        (ax1, st.V, st.max_shear, "MN", "shear force V", "V"),
-        (ax2, st.M, st.max_moment, "MN m", "bending moment M (sagging +)", "M"),
+    for ax, attr, ext_attr, unit, label, sym in (
+        (ax1, "V", "max_shear", "MN", "shear force V", "V"),
+        (ax2, "M", "max_moment", "MN m", "bending moment M (sagging +)", "M"),
     ):
-        ax.plot(x, y / scale, color=_HULL, lw=1.4)
-        ax.fill_between(x, 0, y / scale, color=_HULL, alpha=0.12)
+        for k, (name, s) in enumerate(curves):
+            y = getattr(s, attr)
+            colour = _CASE_COLOURS[k % len(_CASE_COLOURS)]
+            ax.plot(s.x, y / scale, color=colour, lw=1.4, label=name or None)
+            if len(curves) == 1:
+                ax.fill_between(s.x, 0, y / scale, color=colour, alpha=0.12)
+        k_peak = max(range(len(curves)), key=lambda k: abs(getattr(curves[k][1], ext_attr).value))
+        ext = getattr(curves[k_peak][1], ext_attr)
+        which = f" ({curves[k_peak][0]})" if curves[k_peak][0] else ""
         ax.axhline(0, color="black", lw=0.6)
         ax.plot(ext.x, ext.value / scale, "o", color=_EXT, ms=6, zorder=4)
         ax.annotate(
-            f"max |{sym}| = {abs(ext.value) / scale:.2f} {unit}\n"
+            f"max |{sym}| = {abs(ext.value) / scale:.2f} {unit}{which}\n"
             f"x = {ext.x:.2f} m (node {ext.node})",
             # beside the extreme at its own level: the curve lies on the other side there
             xy=(ext.x, ext.value / scale),
@@ -249,9 +262,13 @@ def shear_moment_figure(st, hull, plan=None):
                 ax.axvline(b.x, color=_EXT, lw=0.6, ls=":")
             for b in plan.internal:
                 ax.axvspan(*b.span, color=_INT, alpha=0.06, lw=0)
+    if len(curves) > 1:
+        ax2.legend(fontsize=7, loc="best", frameon=False)
+    worst_V = max(abs(s.closing_shear) for _, s in curves)
+    worst_M = max(abs(s.closing_moment) for _, s in curves)
     ax1.set_title(
-        f"Longitudinal strength: closing V = {st.closing_shear / 1e6:.3f} MN, "
-        f"M = {st.closing_moment / 1e6:.3f} MN m at the bow",
+        f"Longitudinal strength: {'largest ' if len(curves) > 1 else ''}closing |V| = "
+        f"{worst_V / 1e6:.3g} MN, |M| = {worst_M / 1e6:.3g} MN m at the bow",
         pad=34,  # over the node numbers of the top axis and their label
     )
     top = ax1.secondary_xaxis("top")
