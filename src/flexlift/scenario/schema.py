@@ -575,7 +575,37 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
 
     The file is read defensively (:mod:`flexlift.scenario.file`): a regular UTF-8 file of at
     most 1 MB, one YAML document, no duplicate keys, bounded nesting and aliases; an empty
-    file is an error, not the tanker."""
+    file is an error, not the tanker. Every key and its range: ``docs/reference/scenario.md``.
+
+    Parameters
+    ----------
+    name_or_path : str or path-like, optional
+        A built-in name (``tanker``, ``pipeline``) or the path of a YAML file; a relative
+        ``.fis`` path in it is relative to the file's folder. Default ``tanker``.
+
+    Returns
+    -------
+    Scenario
+        The validated scenario, every default filled in (units in the key names).
+
+    Raises
+    ------
+    InputError
+        One line naming the key, the value and what is allowed.
+
+    Examples
+    --------
+    >>> from flexlift.scenario import load_scenario
+    >>> tanker = load_scenario("tanker")
+    >>> tanker.hull.length_m, tanker.lift.layout
+    (78.02, 'mode_nodes')
+    >>> tanker.with_changes(**{"hull.elements": 40}).hull.elements
+    40
+    >>> load_scenario("no-such-wreck.yaml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    flexlift.errors.InputError: ...no such file...
+    """
     if name_or_path is None:
         name_or_path = "tanker"
     source = clean(str(name_or_path), 120)
