@@ -168,8 +168,8 @@ def compute_modes(
     Returns
     -------
     Modes
-        ``frequencies_hz`` [Hz] (heave and pitch first, at 0), mass-normalised ``shapes``
-        [1/sqrt(kg)] and the beam they belong to (``docs/theory/modes.md``).
+        ``omega`` [rad/s] and ``frequencies_hz`` [Hz] (heave and pitch first, at 0), the
+        mass-normalised shapes ``phi`` [1/sqrt(kg)] and the hull (``docs/theory/modes.md``).
 
     Examples
     --------
@@ -177,7 +177,7 @@ def compute_modes(
     >>> from flexlift.structure.hull import hull_from_scenario
     >>> from flexlift.structure.modes import compute_modes
     >>> modes = compute_modes(hull_from_scenario(load_scenario("tanker")))
-    >>> len(modes.frequencies_hz), round(modes.frequencies_hz[2], 3)  # flexible mode 1 [Hz]
+    >>> modes.n_modes, round(float(modes.frequencies_hz[2]), 3)  # flexible mode 1 [Hz]
     (24, 5.003)
 
     Notes
