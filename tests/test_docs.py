@@ -174,6 +174,7 @@ def _rows(page_html: str) -> dict[str, list[str]]:
 
 
 def _numbers(text: str) -> list[float]:
+    text = text.replace("2⁶³−1", str(2**63 - 1))
     return [float(x) for x in re.findall(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", text)]
 
 

@@ -38,6 +38,8 @@ def num(v) -> str:
     """A number as a reader writes it: 350, 0.57, 1e-9, 1e6, 2.5e-5."""
     if isinstance(v, bool):
         return "true" if v else "false"
+    if v == 2**63 - 1:
+        return "2⁶³−1"
     if isinstance(v, int):
         return str(v)
     if math.isinf(v):

@@ -5,8 +5,8 @@ name (``length_m``, ``displacement_t``, ``relief_pressure_bar``): tonnes, bar an
 allowed here, at the edge, and converted to SI by the stages that read them. Every section
 rejects unknown keys and lists the valid ones.
 
-Every number has a range (the comment beside each key says why; the README's table lists
-them): wide enough for the structures flexlift is meant for, from small pipes (EI ~1e5 N m^2)
+Every number has a range (the comment beside each key says why; docs/reference/scenario.md
+lists them): wide enough for the structures flexlift is meant for, from small pipes (EI ~1e5 N m^2)
 to the largest ships (EI ~1e14 N m^2, 20,000 elements), narrow enough that a value inside
 every range cannot exhaust the memory or break the numerics. Numbers are strict: an integer
 may be given for a real number, but never a boolean or text (``elements: true`` or
