@@ -48,3 +48,21 @@ def test_python_api_example_runs(capsys):
     printed = capsys.readouterr().out.split()
     assert printed[0] == "unsorted_mdc"
     assert abs(float(printed[1])) < 0.01  # % gain error of the 4-state mdc model
+
+
+def test_getting_started_wreck_is_valid_and_sized_as_the_page_says(tmp_path):
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.scenario import load_scenario
+    from flexlift.structure.hull import hull_from_scenario
+
+    page = (ROOT / "docs" / "getting-started.md").read_text()
+    blocks = _code_blocks(page, "yaml")
+    assert len(blocks) == 1
+    path = tmp_path / "my-wreck.yaml"
+    path.write_text(blocks[0])
+    scenario = load_scenario(path)
+    plan = plan_lift(scenario, hull_from_scenario(scenario))
+    lifts_t = {round(b.lift / (scenario.environment.gravity_m_s2 * 1000.0)) for b in plan.bags}
+    assert (len(plan.bags), lifts_t) == (11, {32})
+    assert "eleven 35 t bags, modelled at 32 t each" in " ".join(page.split())
+    assert "path/to/flexlift/dev run my-wreck.yaml --out results" in page

@@ -323,3 +323,12 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
     if SWEEP_MARKER in markdown:
         markdown = markdown.replace(SWEEP_MARKER, sweep_tables())
     return markdown
+
+
+#: a reST role before a code span in a rendered docstring (``:func:`name```), and the ``~``
+#: that shortens a dotted name: the site shows the name alone
+ROLE = re.compile(r":(?:func|class|mod|data|meth|attr|obj|exc):\s*(<code>)~?")
+
+
+def on_page_content(html: str, page, config, files) -> str:
+    return ROLE.sub(r"\1", html)
