@@ -5,6 +5,7 @@ merge keys, names such as ``.hidden``)."""
 
 import math
 import os
+import re
 import sys
 import time
 import typing
@@ -18,7 +19,7 @@ from flexlift.cli import main
 from flexlift.errors import InputError
 from flexlift.scenario import Scenario, load_scenario, parse_scenario
 
-#: the documented limits of a scenario file (README, Scenario format)
+#: the documented limits of a scenario file (docs/reference/scenario.md)
 MAX_BYTES = 1_000_000
 MAX_DEPTH = 32
 
@@ -547,7 +548,7 @@ def test_dot_names_cannot_reach_the_output_folder(tmp_path, capsys, monkeypatch)
     assert not (tmp_path / "flexlift-out").exists()
 
 
-# --------------------------------------------------------------------------- the README
+# --------------------------------------------------------------------------- the scenario reference
 def _fmt(x) -> str:
     if x == 2**63 - 1:
         return "2⁶³−1"
@@ -559,7 +560,7 @@ def _fmt(x) -> str:
 
 
 def _allowed(field) -> str:
-    """A field's range as the README writes it: [a, b], [a, b) or a..b (whole numbers)."""
+    """A field's range as the scenario reference writes it: [a, b], [a, b) or a..b (whole numbers)."""
     cs = _constraints(field)
     lo = [(c.ge, "[") for c in cs if isinstance(c, at.Ge)] + [(c.gt, "(") for c in cs if isinstance(c, at.Gt)]
     hi = [(c.le, "]") for c in cs if isinstance(c, at.Le)] + [(c.lt, ")") for c in cs if isinstance(c, at.Lt)]
@@ -569,41 +570,35 @@ def _allowed(field) -> str:
     return f"{lb}{_fmt(low)}, {_fmt(high)}{hb}"
 
 
-def _readme_rows() -> dict[str, str]:
-    """{dotted key: the 'allowed' cell of its row} of the README's scenario table."""
+def _reference_rows() -> dict[str, str]:
+    """{dotted key: the 'allowed' cell of its row} of the scenario reference's tables
+    (docs/reference/scenario.md, generated from the schema by docs/_hooks/reference.py when
+    the site is built; a list's items are ``key[].item``)."""
+    import importlib.util
     import re
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    section = re.search(r"^## Scenario format\n(.*?)(?=^## )", text, flags=re.S | re.M).group(1)
-    out, prefix = {}, ""
-    for line in section.splitlines():
-        if not line.startswith("| ") or line.startswith(("|---", "| key ")):
+    hook = Path(__file__).resolve().parents[1] / "docs" / "_hooks" / "reference.py"
+    spec = importlib.util.spec_from_file_location("docs_reference_hook", hook)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    out = {}
+    for line in module.scenario_tables().splitlines():
+        if not line.startswith("| `"):
             continue
         cells = [c.strip() for c in re.split(r"(?<!\\)\|", line.strip()[1:-1])]  # not at \|
         assert len(cells) == 4, line
-        header = re.fullmatch(r"\*\*`([a-z_]+)(\.?)`\*\*", cells[0])
-        if header and header.group(2):
-            prefix = header.group(1) + "."
-            continue
-        keys, base = [], ""
-        for token in re.findall(r"`([^`]+)`", cells[0]):
-            if token.startswith("."):
-                keys.append(prefix + base + token[1:])
-            else:
-                base = token.rsplit(".", 1)[0] + "." if "." in token else ""
-                keys.append(("" if header else prefix) + token)
-        for k in keys:
-            out[k] = cells[2]
+        out[cells[0].strip("`")] = cells[2]
     return out
 
 
-def test_the_readme_states_every_range():
-    rows = _readme_rows()
+def test_the_scenario_reference_states_every_range():
+    rows = _reference_rows()
     for label, (field, _) in SLOTS.items():
-        key = label.split("[0]")[0]
-        assert key in rows, f"README's scenario table has no row for {key}"
-        assert _allowed(field) in rows[key], f"README: {key} allows {_allowed(field)}, not {rows[key]!r}"
+        key = re.sub(r"\[0\]$", "", label.replace("[0].", "[]."))
+        assert key in rows, f"the scenario reference has no row for {key}"
+        assert _allowed(field) in rows[key], \
+            f"scenario reference: {key} allows {_allowed(field)}, not {rows[key]!r}"
 
 
 # --------------------------------------------------------------------------- the CLI's last line

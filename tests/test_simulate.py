@@ -193,7 +193,7 @@ def test_numerics_failure_keeps_partial_results(quick, monkeypatch):
 
 
 # ----------------------------------------------------------------------------- headline pins
-#: the README's tanker table (flexlift run on the built-in tanker); a change to the physics,
+#: the tanker's numbers in docs/guide/report.md (flexlift run on the built-in tanker); a change to the physics,
 #: the controllers or the integrator that moves any of these must say so and update them
 HEADLINE = {
     # decentralized control shares the breakout pull like the suction, as coordinated does

@@ -193,7 +193,7 @@ def test_a_steep_staged_lift_is_warned_with_where_and_when(line):
     assert "small-deflection" in w
 
 
-#: the built-in line's headline numbers (README, "The built-in line's ascent")
+#: the built-in line's headline numbers (docs/guide/pipelines.md, "The built-in line's ascent")
 LINE_HEADLINE = {
     "decentralized": {"separation_time_s": 648.3, "max_ascent_velocity_ms": 0.2256,
                       "max_bending_moment_MNm": 0.365, "max_utilisation": 0.386,

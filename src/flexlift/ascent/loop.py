@@ -43,15 +43,42 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
              engine="table", progress=None, plant: Plant | None = None) -> Result:
     """Simulate the ascent of ``scenario``.
 
-    control : control mode (default ``scenario.control.mode``): decentralized, coordinated,
-        paper (decentralized control on the paper's uncoupled plant) or open-loop
-    duration : largest simulated time [s] (default ``simulation.duration_s``)
-    engine : the supervisor: "table" (lookup table, default), "exact" (exact inference at
+    Parameters
+    ----------
+    scenario : Scenario
+        The lift (:func:`flexlift.scenario.load_scenario`).
+    control : str, optional
+        Control mode (default ``scenario.control.mode``): ``decentralized``, ``coordinated``,
+        ``paper`` (decentralized control on the paper's uncoupled plant) or ``open-loop``.
+    duration : float, optional
+        Largest simulated time [s] (default ``simulation.duration_s``); the run stops earlier
+        once every bag has held the target for ``simulation.hold_time_s``.
+    engine : str or callable, optional
+        The supervisor: ``"table"`` (lookup table, default), ``"exact"`` (exact inference at
         every sample, slower), a callable (points (n, 2) -> u (n,)) or a (supervisor, fill)
-        pair of callables
-    progress : optional callable(fraction) for a progress bar
-    plant : a prebuilt :class:`~flexlift.ascent.plant.Plant` (default: built from the
-        scenario, the paper's plant in paper mode)
+        pair of callables.
+    progress : callable, optional
+        ``progress(fraction)`` for a progress bar.
+    plant : Plant, optional
+        A prebuilt :class:`~flexlift.ascent.plant.Plant` (default: built from the scenario,
+        the paper's plant in paper mode).
+
+    Returns
+    -------
+    Result
+        ``result.dataset`` (xarray, units in every variable's attributes),
+        ``result.criteria`` (name: passed), ``result.headline`` (the headline numbers, units
+        in their names), ``result.events``.
+
+    Examples
+    --------
+    >>> from flexlift.scenario import load_scenario
+    >>> from flexlift.ascent import simulate
+    >>> result = simulate(load_scenario("tanker"), control="coordinated")
+    >>> all(result.criteria.values())
+    True
+    >>> round(result.headline["max_ascent_velocity_ms"], 2)  # [m/s], the limit is 0.6
+    0.21
     """
     mode = control or scenario.control.mode
     if mode not in MODES:

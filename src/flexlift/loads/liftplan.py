@@ -140,8 +140,36 @@ def _snap(x: float, hull: Hull) -> float:
 
 
 def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
-    """Size and lay out the bags of ``scenario`` on ``hull``; its dry ``modes`` place the
-    external bags of the paper's layout (computed here when needed and not given)."""
+    """Size and lay out the bags of ``scenario`` on ``hull``.
+
+    The bag-count rule and the layouts: ``docs/theory/factors.md#bag-count``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The lift.
+    hull : Hull
+        Its structure (:func:`~flexlift.structure.hull.hull_from_scenario`).
+    modes : Modes, optional
+        The dry modes that place the external bags of the paper's layout (computed here when
+        needed and not given).
+
+    Returns
+    -------
+    LiftPlan
+        The bags (``plan.bags``, ``plan.bag(name)``; lifts in N, positions in m) and the
+        weights they carry.
+
+    Examples
+    --------
+    >>> from flexlift.scenario import load_scenario
+    >>> from flexlift.structure.hull import hull_from_scenario
+    >>> from flexlift.loads.liftplan import plan_lift
+    >>> scenario = load_scenario("tanker")
+    >>> plan = plan_lift(scenario, hull_from_scenario(scenario))
+    >>> len(plan.bags), plan.bag("bag_2").node, round(plan.bag("bag_2").lift / 9.81e3)  # t
+    (7, 4, 517)
+    """
     env = scenario.environment
     lift = scenario.lift
     g, rho = env.gravity_m_s2, env.seawater_density_kg_m3

@@ -102,7 +102,7 @@ class Pipe(_Section):
     coating_thickness_m: real(0, 1) = 0.060  # concrete weight coat, typically 40-150 mm
     coating_density_kg_m3: Density = 3044.0  # high-density concrete (190 pcf), common spec
     contents: Contents = "empty"
-    allowable_stress_MPa: real(1, 2000) | None = None  # default 0.72 SMYS (README)
+    allowable_stress_MPa: real(1, 2000) | None = None  # default 0.72 SMYS (docs/theory/statics.md#pipe-section)
     breakout_suction_kN_m: real(0, 1000) | None = None  # suction per length; default: lift.breakout_factor
     segments: Annotated[list[PipeSegment], Field(max_length=MAX_ITEMS)] = []
     point_masses: Annotated[list[PipePointMass], Field(max_length=MAX_ITEMS)] = []

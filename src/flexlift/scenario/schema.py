@@ -5,8 +5,8 @@ name (``length_m``, ``displacement_t``, ``relief_pressure_bar``): tonnes, bar an
 allowed here, at the edge, and converted to SI by the stages that read them. Every section
 rejects unknown keys and lists the valid ones.
 
-Every number has a range (the comment beside each key says why; the README's table lists
-them): wide enough for the structures flexlift is meant for, from small pipes (EI ~1e5 N m^2)
+Every number has a range (the comment beside each key says why; docs/reference/scenario.md
+lists them): wide enough for the structures flexlift is meant for, from small pipes (EI ~1e5 N m^2)
 to the largest ships (EI ~1e14 N m^2, 20,000 elements), narrow enough that a value inside
 every range cannot exhaust the memory or break the numerics. Numbers are strict: an integer
 may be given for a real number, but never a boolean or text (``elements: true`` or
@@ -575,7 +575,37 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
 
     The file is read defensively (:mod:`flexlift.scenario.file`): a regular UTF-8 file of at
     most 1 MB, one YAML document, no duplicate keys, bounded nesting and aliases; an empty
-    file is an error, not the tanker."""
+    file is an error, not the tanker. Every key and its range: ``docs/reference/scenario.md``.
+
+    Parameters
+    ----------
+    name_or_path : str or path-like, optional
+        A built-in name (``tanker``, ``pipeline``) or the path of a YAML file; a relative
+        ``.fis`` path in it is relative to the file's folder. Default ``tanker``.
+
+    Returns
+    -------
+    Scenario
+        The validated scenario, every default filled in (units in the key names).
+
+    Raises
+    ------
+    InputError
+        One line naming the key, the value and what is allowed.
+
+    Examples
+    --------
+    >>> from flexlift.scenario import load_scenario
+    >>> tanker = load_scenario("tanker")
+    >>> tanker.hull.length_m, tanker.lift.layout
+    (78.02, 'mode_nodes')
+    >>> tanker.with_changes(**{"hull.elements": 40}).hull.elements
+    40
+    >>> load_scenario("no-such-wreck.yaml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    flexlift.errors.InputError: ...no such file...
+    """
     if name_or_path is None:
         name_or_path = "tanker"
     source = clean(str(name_or_path), 120)

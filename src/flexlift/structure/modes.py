@@ -180,15 +180,39 @@ def compute_modes(
 ) -> Modes:
     """Modes of a free-free beam: two exact rigid modes then the lowest flexible ones.
 
-    hull : the structure (or an assembled :class:`Beam`)
-    n_modes : total number of modes wanted, rigid included (default: all, 2 per node, up to
-        400 elements; 22 = 2 rigid + 20 flexible above that) [-]
-    solver : "sparse" (flexibility Lanczos of :mod:`flexlift.structure.eigen`: O(N) memory,
+    Parameters
+    ----------
+    hull : Hull or Beam
+        The structure (:func:`~flexlift.structure.hull.hull_from_scenario`), or an assembled
+        :class:`Beam`.
+    n_modes : int, optional
+        Total number of modes wanted, rigid included (default: all, 2 per node, up to 400
+        elements; 22 = 2 rigid + 20 flexible above that) [-].
+    solver : str, optional
+        ``"sparse"`` (flexibility Lanczos of :mod:`flexlift.structure.eigen`: O(N) memory,
         accurate to round-off at any mesh size for the low modes; the high modes of a model
-        up to DENSE_MAX_DOF = 4002 DOFs from a dense stiffness solve), "dense" (generalised
-        ``eigh`` of K and M projected on the complement of the rigid modes: O(N^2) memory,
-        O(N^3) time, loses digits as eps * (N / 4.73)^4 on fine meshes), or "auto" (sparse)
+        up to DENSE_MAX_DOF = 4002 DOFs from a dense stiffness solve), ``"dense"``
+        (generalised ``eigh`` of K and M projected on the complement of the rigid modes:
+        O(N^2) memory, O(N^3) time, loses digits as eps * (N / 4.73)^4 on fine meshes), or
+        ``"auto"`` (sparse).
 
+    Returns
+    -------
+    Modes
+        ``omega`` [rad/s] and ``frequencies_hz`` [Hz] (heave and pitch first, at 0), the
+        mass-normalised shapes ``phi`` [1/sqrt(kg)] and the hull (``docs/theory/modes.md``).
+
+    Examples
+    --------
+    >>> from flexlift.scenario import load_scenario
+    >>> from flexlift.structure.hull import hull_from_scenario
+    >>> from flexlift.structure.modes import compute_modes
+    >>> modes = compute_modes(hull_from_scenario(load_scenario("tanker")))
+    >>> modes.n_modes, round(float(modes.frequencies_hz[2]), 3)  # flexible mode 1 [Hz]
+    (24, 5.003)
+
+    Notes
+    -----
     The sparse solver checks SPEC section 2 on what it returns: Phi^T M Phi = I and
     Phi^T K Phi = diag(omega^2) to GRAM_TOL (1e-10, relative to the larger omega^2 of each
     pair). When the highest requested modes miss it (many modes of a very fine mesh: the

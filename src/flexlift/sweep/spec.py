@@ -129,8 +129,39 @@ class SweepSpec:
 
 
 def load_spec(path: str | os.PathLike, yes: bool = False) -> SweepSpec:
-    """Read and validate the SPEC file ``path`` (``yes``: allow more than :data:`LARGE`
-    cases)."""
+    """Read and validate the SPEC file ``path`` (keys: ``docs/reference/sweep.md``).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The SPEC file (YAML); a relative ``base`` path in it is relative to its folder.
+    yes : bool, optional
+        Allow more than :data:`LARGE` cases (100,000; never more than :data:`MAX_CASES`).
+
+    Returns
+    -------
+    SweepSpec
+        The validated sweep: its base scenario with ``set`` applied, the control modes, and
+        the grid or the distributions.
+
+    Raises
+    ------
+    InputError
+        One line naming the key, the value and what is allowed.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile, yaml
+    >>> from flexlift.sweep import load_spec
+    >>> vary = {"hydro.drag_coefficient": {"dist": "normal", "mean": 1.2, "std": 0.1}}
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder, "sweep.yaml")
+    ...     _ = path.write_text(yaml.safe_dump({"base": "tanker", "monte_carlo": {
+    ...         "samples": 200, "seed": 1, "vary": vary}}))
+    ...     spec = load_spec(path)
+    >>> spec.n_cases, spec.method, spec.keys
+    (200, 'lhs', ('hydro.drag_coefficient',))
+    """
     source = clean(os.fspath(path), 120)
     data = load_yaml(decode(read_bytes(Path(path), source, "a SPEC is a YAML file"), source),
                      source)
