@@ -5,8 +5,9 @@ results at the end.
 keeps at most ``engine.window`` cases in flight, and writes each case's record as soon as it
 returns. A case whose worker died (a killed process, a lost Dask worker) is retried once, on
 its own (so that a case that kills its worker cannot take an innocent one down with it
-twice); if it dies again it is recorded as lost. Ctrl-C (or any exception) stops the engine
-and leaves every finished case in the folder for the rerun.
+twice); if it dies again it is recorded as lost. Ctrl-C (or any exception, such as a lost Dask
+scheduler: :class:`~flexlift.sweep.executors.SchedulerLost`) stops the engine and leaves
+every finished case in the folder for the rerun.
 """
 
 from __future__ import annotations
@@ -142,6 +143,9 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
             records[case.index] = folder.write_case(names[case.index], record, datasets)
             if progress is not None:
                 progress(len(records), total, _failures(records))
+        check = getattr(engine, "check", None)
+        if check is not None:  # a lost Dask scheduler ends the sweep (executors.SchedulerLost)
+            check()
 
 
 def _submit(engine, spec, case: Case, attempts, inflight) -> None:
