@@ -46,7 +46,12 @@ CLI_MODES = 10
 
 
 def _main(args) -> int:
+    from flexlift.scenario.cost import check_modes
+
     scenario = scenario_from(args)
+    elements = args.elements or scenario.hull.elements
+    if args.modes is None or 3 <= args.modes <= 2 * elements + 2:  # else the stage says so
+        check_modes(elements, args.modes, "--elements/--modes")
     with writing(args.out, "modes") as out:
         res = run_stage(scenario, out, elements=args.elements, n_modes=args.modes,
                         solver=args.solver)

@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from flexlift.cli._common import add_json_arg, checked, emit_json
+from flexlift.errors import clean
 from flexlift.scenario.types import whole
 from flexlift.sweep.executors import WORKERS_PER_CORE, max_workers
 
@@ -43,7 +44,8 @@ def add_parser(sub) -> None:
                    help="output folder (default: flexlift-out/sweep-<SPEC name>); rerun with the "
                         "same SPEC and --out to resume")
     p.add_argument("--yes", action="store_true",
-                   help="allow a very large sweep (more than 100,000 cases)")
+                   help="allow a very large sweep (more than 100,000 cases, or estimated to take "
+                        "more than 10 minutes)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_json_arg(p)
     p.set_defaults(func=_main)
@@ -81,6 +83,11 @@ def _main(args: argparse.Namespace) -> int:
     spec = load_spec(args.spec, yes=args.yes)
     out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{Path(args.spec).stem}"
     engine = make_engine(args.workers, args.scheduler, args.dask_local)
+    try:
+        _check_cost(spec, engine.workers, args)
+    except BaseException:
+        engine.close(cancel=True)
+        raise
     bar = _Bar(args.quiet, engine.name)
     quiet_cases = OutsideCases()  # a case's warnings go to its record, not to the terminal
     handlers = list(logging.getLogger("flexlift").handlers)
@@ -117,6 +124,20 @@ def _main(args: argparse.Namespace) -> int:
                          f"({n} of {s['cases']}): {msg}\n")
         return 1
     return 0
+
+
+def _check_cost(spec, workers: int, args) -> None:
+    """Refuse a sweep estimated beyond the cost limit unless ``--yes`` (scenario/cost.py)."""
+    from flexlift.errors import InputError
+    from flexlift.scenario.cost import MAX_SECONDS
+    from flexlift.sweep.run import estimate_sweep
+
+    per, total = estimate_sweep(spec, workers)
+    if total > MAX_SECONDS and not args.yes:
+        raise InputError.from_line(
+            f"{clean(str(args.spec), 120)}: {spec.n_cases:,} cases of up to {per:.2g} s each on "
+            f"{workers} worker(s): about {total / 60:,.0f} min estimated; at most "
+            f"{MAX_SECONDS / 60:.0f} min without --yes (give --yes to run it, or fewer cases)")
 
 
 def _rerun(args: argparse.Namespace, out: Path) -> str:

@@ -108,6 +108,25 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
     return result
 
 
+#: cases whose cost is estimated to bound a sweep's per-case cost (spread over the sweep)
+COST_SAMPLE = 50
+
+
+def estimate_sweep(spec: SweepSpec, workers: int) -> tuple[float, float]:
+    """(the largest estimated cost of a case [s], the sweep's [s] on ``workers``): each case
+    is an ascent per control mode (:func:`flexlift.scenario.cost.estimate`), priced on up to
+    ``COST_SAMPLE`` cases spread over the sweep; cases x that cost / workers."""
+    from flexlift.scenario.cost import estimate
+
+    cases = make_cases(spec)
+    if not cases:
+        return 0.0, 0.0
+    step = max(1, len(cases) // COST_SAMPLE)
+    per = max(estimate(case_scenario(spec, c)).ascent_s for c in cases[::step][:COST_SAMPLE + 1])
+    per *= len(spec.controls)
+    return per, per * len(cases) / max(1, int(workers))
+
+
 def _failures(records: dict) -> int:
     return sum(r["status"] != "completed" for r in records.values())
 
