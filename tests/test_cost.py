@@ -178,6 +178,7 @@ def test_the_estimate_grows_with_what_the_work_grows_with(tanker):
                                                                          "less than or equal"]),
     (["sweep", "SPEC", "--workers", "100000"], ["--workers", "per core"]),
     (["sweep", "SPEC", "--dask-local", "1000"], ["--dask-local", "per core"]),
+    (["fuzzy", "--grid", "1000000", "--json"], ["--grid", "less than or equal to 1001"]),
 ])
 def test_an_option_is_its_key_same_range_same_message(args, needles, tmp_path):
     spec = tmp_path / "s.yaml"
