@@ -64,7 +64,7 @@ def _flexlift(*args) -> list[str]:
 def _sweep(spec_file: Path, out: Path) -> dict:
     t0 = time.perf_counter()
     proc = subprocess.run(_flexlift("sweep", str(spec_file), "--workers", str(WORKERS),
-                                    "--out", str(out), "--quiet", "--json"),
+                                    "--out", str(out), "--quiet", "--json", "--yes"),
                           capture_output=True, text=True, check=True)
     wall = time.perf_counter() - t0
     j = json.loads(proc.stdout)

@@ -192,7 +192,8 @@ def test_an_external_bag_between_nodes_reduces_as_a_point_load(tanker):
 
 
 def test_a_plan_needing_absurdly_many_bags_is_refused_before_allocating(tanker):
-    from flexlift.loads.liftplan import MAX_BAGS, plan_lift
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.scenario.cost import MAX_BAGS
 
     sc = tanker.with_changes(**{"lift.catalogue_bag.lift_t": 0.01})  # 3,617 t / 10 kg
     with pytest.raises(InputError, match=f"at most {MAX_BAGS:,}"):

@@ -585,6 +585,8 @@ def test_a_large_sweep_needs_yes(tmp_path):
 ])
 def test_bad_engine_options_are_one_line_and_exit_2(args, needles, tmp_path, capsys):
     import dask
+    import distributed  # noqa: F401 - its defaults first: imported inside config.set, they
+    # would leave with the setting (the second case then misses distributed.comm's defaults)
 
     spec = write_spec(tmp_path / "s.yaml", mc(samples=2))
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):

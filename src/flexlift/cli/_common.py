@@ -37,6 +37,78 @@ def scenario_from(args: argparse.Namespace) -> Scenario:
     return load_scenario(args.scenario)
 
 
+def _field(key: str):
+    """The type (with its range) of the scenario key ``key`` ("hull.elements")."""
+    from typing import Annotated
+
+    from pydantic import BaseModel
+
+    model, *path, last = [Scenario, *key.split(".")]
+    for part in path:
+        model = model.model_fields[part].annotation
+        if not (isinstance(model, type) and issubclass(model, BaseModel)):  # Optional[Section]
+            model = next(a for a in getattr(model, "__args__", ()) if isinstance(a, type)
+                         and issubclass(a, BaseModel))
+    info = model.model_fields[last]
+    return Annotated[(info.annotation, *info.metadata)] if info.metadata else info.annotation
+
+
+def _number(text: str):
+    """A number as YAML would read it: a whole number stays whole."""
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            continue
+    return text
+
+
+def checked(option: str, kind, also: str = ""):
+    """argparse type: the option's value checked by the pydantic type ``kind`` (a range of
+    :mod:`flexlift.scenario.types`), with its message: ``--workers 100000: Input should be
+    less than or equal to 64``."""
+    from pydantic import TypeAdapter, ValidationError
+
+    from flexlift.errors import brief
+
+    adapter = TypeAdapter(kind)
+
+    def parse(text: str):
+        value = _number(text)
+        if isinstance(value, str):
+            raise argparse.ArgumentTypeError(f"{brief(text)}: a number is needed here")
+        try:
+            return adapter.validate_python(value)
+        except ValidationError as exc:
+            msg = exc.errors(include_url=False)[0]["msg"].removeprefix("Value error, ")
+            raise argparse.ArgumentTypeError(f"{brief(value)}: {msg}{also}") from None
+
+    return parse
+
+
+def key_option(option: str, key: str):
+    """argparse type: an option that is a scenario key (``--elements`` is ``hull.elements``):
+    the same range and the same message as in a scenario file."""
+    return checked(option, _field(key), f" (the range of {key} in a scenario file)")
+
+
+def with_options(scenario: Scenario, options: dict[str, tuple[str, object]]) -> Scenario:
+    """``scenario`` with the options that are its keys applied and validated as the file's
+    keys are, checks across keys included (``--duration`` against ``time_step_s``):
+    ``options`` maps an option to (its key, its value or None)."""
+    from flexlift.errors import InputError
+
+    changes = {key: v for key, v in options.values() if v is not None}
+    if not changes:
+        return scenario
+    try:
+        return scenario.with_changes(**changes)
+    except InputError as exc:
+        named = ", ".join(o for o, (k, v) in options.items() if v is not None)
+        line = str(exc).removeprefix(f"{scenario.name} (modified): ")
+        raise InputError.from_line(f"{named}: {line}") from None
+
+
 def positive_int(name: str):
     """argparse type: an integer >= 1, with a one-line error naming the option."""
 

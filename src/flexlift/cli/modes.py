@@ -14,6 +14,7 @@ from flexlift.cli._common import (
     add_out_arg,
     add_scenario_arg,
     emit_json,
+    key_option,
     positive_int,
     scenario_from,
     writing,
@@ -28,7 +29,7 @@ def add_parser(sub) -> None:
         description=__doc__,
     )
     add_scenario_arg(p)
-    p.add_argument("--elements", type=positive_int("--elements"), default=None,
+    p.add_argument("--elements", type=key_option("--elements", "hull.elements"), default=None,
                    help="re-mesh the hull with this many equal elements (default: the scenario's)")
     p.add_argument("--modes", type=positive_int("--modes"), default=None,
                    help="total number of modes, rigid included, 3..2(N+1) (default: all up to "
@@ -45,7 +46,12 @@ CLI_MODES = 10
 
 
 def _main(args) -> int:
+    from flexlift.scenario.cost import check_modes
+
     scenario = scenario_from(args)
+    elements = args.elements or scenario.hull.elements
+    if args.modes is None or 3 <= args.modes <= 2 * elements + 2:  # else the stage says so
+        check_modes(elements, args.modes, "--elements/--modes")
     with writing(args.out, "modes") as out:
         res = run_stage(scenario, out, elements=args.elements, n_modes=args.modes,
                         solver=args.solver)

@@ -15,8 +15,9 @@ from flexlift.cli._common import (
     add_out_arg,
     add_scenario_arg,
     emit_json,
-    positive_float,
+    key_option,
     scenario_from,
+    with_options,
     writing,
 )
 from flexlift.output.controllers import copy_controller_files
@@ -28,7 +29,7 @@ def add_parser(sub) -> None:
     add_scenario_arg(p)
     p.add_argument("--control", choices=MODES, default=None,
                    help="control mode (default: the scenario's control.mode)")
-    p.add_argument("--duration", type=positive_float("--duration"), default=None,
+    p.add_argument("--duration", type=key_option("--duration", "simulation.duration_s"), default=None,
                    help="largest simulated time [s] (default: simulation.duration_s)")
     add_out_arg(p, "results (netCDF, CSV) and figures")
     add_json_arg(p)
@@ -37,6 +38,8 @@ def add_parser(sub) -> None:
 
 def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
+    # --duration is simulation.duration_s: checked with the scenario's other keys (steps, rows)
+    with_options(scenario, {"--duration": ("simulation.duration_s", args.duration)})
     with writing(args.out, "simulate") as folder:
         out = run_stage(scenario, folder, control=args.control, duration=args.duration,
                         primary=True)

@@ -7,7 +7,8 @@ It ends with ``results.nc`` (a ``case`` dimension, the varied keys as coordinate
 ``summary.json`` and ``report.html``.
 
 Exit codes: 0 the sweep ran (criteria failing are results, not errors); 1 every case failed
-(the most common failure is printed); 2 bad input (an unknown key, a bad distribution, an
+(the most common failure is printed), or the Dask scheduler was lost during the sweep (the
+finished cases are kept; the command to finish it is printed); 2 bad input (an unknown key, a bad distribution, an
 unreachable scheduler, ...); 130 interrupted (the finished cases are kept).
 """
 
@@ -18,25 +19,33 @@ import logging
 import sys
 from pathlib import Path
 
-from flexlift.cli._common import add_json_arg, emit_json, positive_int
+from flexlift.cli._common import add_json_arg, checked, emit_json
+from flexlift.errors import clean
+from flexlift.scenario.types import whole
+from flexlift.sweep.executors import WORKERS_PER_CORE, max_workers
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("sweep", help="a grid or Monte Carlo of ascents: probability of a safe lift",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("spec", help="the SPEC file (YAML: base, control, set, grid or monte_carlo)")
-    p.add_argument("--workers", type=positive_int("--workers"), default=None,
-                   help="local worker processes (default: every core; 1: in this process)")
+    p.add_argument("--workers", type=checked("--workers", whole(1, max_workers()),
+                                                    f" ({WORKERS_PER_CORE} per core)"), default=None,
+                   help=f"local worker processes, at most {WORKERS_PER_CORE} per core (default: "
+                        "every core; 1: in this process)")
     dask = p.add_mutually_exclusive_group()
     dask.add_argument("--scheduler", metavar="ADDRESS", default=None,
                       help="run on the Dask cluster of this scheduler, e.g. tcp://host:8786")
-    dask.add_argument("--dask-local", metavar="N", type=positive_int("--dask-local"), default=None,
-                      help="start a Dask LocalCluster of N workers and run on it")
+    dask.add_argument("--dask-local", metavar="N", type=checked("--dask-local", whole(1, max_workers()),
+                                                              f" ({WORKERS_PER_CORE} per core)"), default=None,
+                      help=f"start a Dask LocalCluster of N workers (at most {WORKERS_PER_CORE} per "
+                      "core) and run on it")
     p.add_argument("--out", type=Path, default=None,
                    help="output folder (default: flexlift-out/sweep-<SPEC name>); rerun with the "
                         "same SPEC and --out to resume")
     p.add_argument("--yes", action="store_true",
-                   help="allow a very large sweep (more than 100,000 cases)")
+                   help="allow a very large sweep (more than 100,000 cases, or estimated to take "
+                        "more than 10 minutes)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_json_arg(p)
     p.set_defaults(func=_main)
@@ -68,12 +77,17 @@ class _Bar:
 def _main(args: argparse.Namespace) -> int:
     from flexlift.cli import Terminated
     from flexlift.sweep import load_spec, run_sweep
-    from flexlift.sweep.executors import make_engine
+    from flexlift.sweep.executors import SchedulerLost, make_engine
     from flexlift.sweep.worker import OutsideCases
 
     spec = load_spec(args.spec, yes=args.yes)
     out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{Path(args.spec).stem}"
     engine = make_engine(args.workers, args.scheduler, args.dask_local)
+    try:
+        _check_cost(spec, engine.workers, args)
+    except BaseException:
+        engine.close(cancel=True)
+        raise
     bar = _Bar(args.quiet, engine.name)
     quiet_cases = OutsideCases()  # a case's warnings go to its record, not to the terminal
     handlers = list(logging.getLogger("flexlift").handlers)
@@ -87,6 +101,11 @@ def _main(args: argparse.Namespace) -> int:
         sys.stderr.write(f"flexlift sweep: {how}; the finished cases are kept in {out}: run "
                          "the same command again to finish the sweep\n")
         return 143 if isinstance(exc, Terminated) else 130
+    except SchedulerLost as exc:
+        bar.close()
+        sys.stderr.write(f"flexlift sweep: {exc}; the finished cases are kept in {out}: to "
+                         f"finish the sweep, run {_rerun(args, out)}\n")
+        return 1
     finally:
         bar.close()
         for h in handlers:
@@ -105,6 +124,34 @@ def _main(args: argparse.Namespace) -> int:
                          f"({n} of {s['cases']}): {msg}\n")
         return 1
     return 0
+
+
+def _check_cost(spec, workers: int, args) -> None:
+    """Refuse a sweep estimated beyond the cost limit unless ``--yes`` (scenario/cost.py)."""
+    from flexlift.errors import InputError
+    from flexlift.scenario.cost import MAX_SECONDS
+    from flexlift.sweep.run import estimate_sweep
+
+    per, total = estimate_sweep(spec, workers)
+    if total > MAX_SECONDS and not args.yes:
+        raise InputError.from_line(
+            f"{clean(str(args.spec), 120)}: {spec.n_cases:,} cases of up to {per:.2g} s each on "
+            f"{workers} worker(s): about {total / 60:,.0f} min estimated; at most "
+            f"{MAX_SECONDS / 60:.0f} min without --yes (give --yes to run it, or fewer cases)")
+
+
+def _rerun(args: argparse.Namespace, out: Path) -> str:
+    """The command that resumes this sweep (same SPEC, same folder, same engine)."""
+    import shlex
+
+    cmd = ["flexlift", "sweep", str(args.spec), "--out", str(out)]
+    if args.scheduler is not None:
+        cmd += ["--scheduler", args.scheduler]
+    if args.dask_local is not None:
+        cmd += ["--dask-local", str(args.dask_local)]
+    if args.yes:
+        cmd.append("--yes")
+    return shlex.join(cmd)
 
 
 def _print_summary(s: dict, out: Path) -> None:

@@ -21,6 +21,7 @@ from flexlift import constants as C
 from flexlift.errors import InputError
 from flexlift.loads import balance
 from flexlift.physics.hydro import sphere_diameter
+from flexlift.scenario.cost import estimate, refusal
 from flexlift.structure.hull import Hull
 from flexlift.structure.modes import Modes, compute_modes, mode_nodes
 
@@ -119,8 +120,6 @@ class LiftPlan:
         raise InputError("bag", name, f"known bags are {', '.join(b.name for b in self.bags)}")
 
 
-#: the most bags flexlift sizes for a plan (a long pipeline has a few hundred)
-MAX_BAGS = 2_000
 
 
 def bag_count(required_lift_t: float, catalogue_lift_t: float) -> tuple[int, float]:
@@ -182,10 +181,12 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
     required = lift.breakout_factor * wet
     cat = lift.catalogue_bag.lift_t * C.TONNE * g
     n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)
-    if lift.bags is None and n > MAX_BAGS:
+    # the schema's cost check estimated the automatic layout's count; here it is exact
+    too_large = refusal(estimate(scenario, bags=n)) if lift.bags is None else None
+    if too_large is not None:
         raise InputError("lift.catalogue_bag.lift_t", lift.catalogue_bag.lift_t,
-                         f"the plan would need {n:,} bags of it for {required / (C.TONNE * g):,.0f} t; "
-                         f"at most {MAX_BAGS:,}: choose a larger catalogue bag")
+                         f"the plan would need {n:,} bags of it for {required / (C.TONNE * g):,.0f} t: "
+                         f"{too_large}; choose a larger catalogue bag")
     if lift.bag_lift_t is not None:
         per_t = lift.bag_lift_t
     per = per_t * C.TONNE * g

@@ -8,7 +8,9 @@ rejects unknown keys and lists the valid ones.
 Every number has a range (the comment beside each key says why; docs/reference/scenario.md
 lists them): wide enough for the structures flexlift is meant for, from small pipes (EI ~1e5 N m^2)
 to the largest ships (EI ~1e14 N m^2, 20,000 elements), narrow enough that a value inside
-every range cannot exhaust the memory or break the numerics. Numbers are strict: an integer
+every range cannot exhaust the memory or break the numerics; what the ranges together allow
+is bounded by one cost model (:mod:`flexlift.scenario.cost`: the bags after clusters, modes x
+elements, steps x bags), checked for every scenario. Numbers are strict: an integer
 may be given for a real number, but never a boolean or text (``elements: true`` or
 ``length_m: "78"`` are errors, not 1 and 78), and never NaN or infinity.
 
@@ -36,6 +38,7 @@ from pydantic import (
 
 from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
+from flexlift.scenario import cost
 from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
 from flexlift.scenario.messages import first_error, format_error
 from flexlift.scenario.pipe import Pipe, derive, underive
@@ -488,6 +491,12 @@ class Scenario(_Section):
                 f"simulation.time_step_s {sim.time_step_s} s must not exceed the "
                 f"control period {1.0 / self.control.sample_rate_Hz} s"
             )
+        # every range above may hold and the whole still be too much work: the bags after
+        # clusters, modes x elements, steps x bags (scenario/cost.py, its limits); the
+        # automatic layout's bags are counted where they are sized (loads/liftplan.py)
+        too_large = cost.refusal(cost.estimate(self, bags=None if self.lift.bags else 0))
+        if too_large is not None:
+            raise ValueError(too_large)
         return self
 
     # ------------------------------------------------------------------ conveniences

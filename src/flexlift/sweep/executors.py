@@ -13,6 +13,16 @@ worker.run_case` and says how many cases it can usefully hold at once (``window`
   (``--scheduler tcp://host:8786``) or a ``LocalCluster`` started here (``--dask-local N``).
   Dask is imported only here, and only when asked for.
 
+Nothing waits forever on Dask: the scheduler is probed first, the whole handshake bounded by
+the connect timeout (``distributed.comm.timeouts.connect``, ``DASK_DISTRIBUTED__COMM__TIMEOUTS
+__CONNECT``; Dask's own connect bounds the TCP connection but not the reply, so a port that
+accepts and never answers would hold ``Client()`` for good): an unreachable or silent scheduler
+is one line (:class:`~flexlift.errors.InputError`, exit 2) within that timeout plus a few
+seconds. While the sweep runs, :meth:`DaskEngine.check` is called at every poll: once the
+client has lost its scheduler and not reconnected within ``LOST_GRACE_S`` (or its own
+reconnection gave up), it raises :class:`SchedulerLost`; the sweep ends with its finished
+cases kept.
+
 Workers ignore Ctrl-C (the coordinating process handles it and stops them), and their own
 log records are collected per case by the worker, not printed.
 """
@@ -26,10 +36,31 @@ import multiprocessing
 import os
 import signal
 import threading
+import time
 
 from flexlift.errors import InputError, clean
 
 log = logging.getLogger(__name__)
+#: how long a lost Dask scheduler may take to come back before the sweep ends [s] (the cases
+#: in flight were cancelled by Dask when the connection dropped; they run again on reconnect)
+LOST_GRACE_S = 20.0
+#: the most a Client's close may take once its scheduler is gone [s]
+CLOSE_S = 5.0
+#: the most local workers (``--workers``, ``--dask-local``) per core: no sweep runs faster with
+#: more workers than cores (a case is one busy core), and each worker holds ~150 MB plus its
+#: case's 100-300 MB, so four per core bound the memory at ~2 GB per core; ``--workers 100000``
+#: would start 100,000 processes before the first case (a Dask cluster's own workers, with
+#: ``--scheduler``, are the cluster's business)
+WORKERS_PER_CORE = 4
+
+
+def max_workers() -> int:
+    """The most local workers: ``WORKERS_PER_CORE`` per core this process may use."""
+    return WORKERS_PER_CORE * local_cores()
+
+
+class SchedulerLost(RuntimeError):
+    """The Dask scheduler went away during a sweep (killed, or its machine lost)."""
 
 
 def local_cores() -> int:
@@ -80,6 +111,9 @@ class Serial:
     def close(self, cancel: bool = False) -> None:
         pass
 
+    def check(self) -> None:
+        """Nothing to lose: the cases run here."""
+
 
 class Processes:
     """A pool of ``workers`` local processes."""
@@ -126,6 +160,9 @@ class Processes:
             with contextlib.suppress(OSError):
                 end.close()
 
+    def check(self) -> None:
+        """A dead worker breaks only its cases (retried by the sweep): nothing to raise."""
+
 
 class DaskEngine:
     """Cases as Dask tasks through ``Client.get_executor()``.
@@ -147,6 +184,8 @@ class DaskEngine:
         except ImportError:
             raise InputError.from_line(
                 "--scheduler/--dask-local need Dask: pip install 'flexlift[dask]'") from None
+        # Dask's own records of a lost connection are tracebacks; the sweep says it in one line
+        self._log_levels = _quiet("distributed")
         if timeout is None:  # Dask's own setting (DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT)
             timeout = parse_timedelta(dask.config.get("distributed.comm.timeouts.connect"), "s")
         self.cluster = None
@@ -161,6 +200,7 @@ class DaskEngine:
                                                 silence_logs=logging.ERROR)
                 self.client = Client(self.cluster, timeout=timeout)
             else:
+                probe(scheduler, timeout)
                 self.client = Client(scheduler, timeout=timeout)
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             self._close_cluster()
@@ -172,16 +212,34 @@ class DaskEngine:
         self.workers = threads
         self.window = 2 * threads
         self.address = self.client.scheduler.address
+        self.timeout = float(timeout)
         self._executor = self.client.get_executor(pure=False)
+        self._lost_since: float | None = None
 
     def submit(self, fn, *args) -> cf.Future:
         return self._executor.submit(fn, *args)
 
+    def check(self) -> None:
+        """Raise :class:`SchedulerLost` once the scheduler has been gone ``LOST_GRACE_S``
+        (Dask reconnects for its connect timeout; a short break is waited out) or the client
+        gave up reconnecting."""
+        status = self.client.status
+        if status == "running":
+            self._lost_since = None
+            return
+        now = time.monotonic()
+        if self._lost_since is None:
+            self._lost_since = now
+        if status in ("closing", "closed", "failed") or now - self._lost_since > LOST_GRACE_S:
+            raise SchedulerLost(f"the Dask scheduler {self.address} was lost (the client is "
+                                f"{status} since {now - self._lost_since:.0f} s)")
+
     def close(self, cancel: bool = False) -> None:
+        lost = self.client.status != "running"
         with contextlib.suppress(Exception):
-            self._executor.shutdown(wait=not cancel)
+            self._executor.shutdown(wait=not (cancel or lost))
         with contextlib.suppress(Exception):
-            self.client.close()
+            self.client.close(timeout=CLOSE_S if (cancel or lost) else None)
         self._close_cluster()
 
     def _close_cluster(self) -> None:
@@ -189,6 +247,39 @@ class DaskEngine:
             with contextlib.suppress(Exception):
                 self.cluster.close()
             self.cluster = None
+        for name, level in self._log_levels.items():
+            logging.getLogger(name).setLevel(level)
+        self._log_levels = {}
+
+
+def _quiet(prefix: str) -> dict[str, int]:
+    """Raise the loggers named ``prefix``/``prefix.*`` that have a level of their own (Dask
+    configures several, each with its own handler) to CRITICAL; return their old levels."""
+    names = [prefix] + [n for n, lg in logging.root.manager.loggerDict.items()
+                        if n.startswith(prefix + ".") and isinstance(lg, logging.Logger)
+                        and lg.level != logging.NOTSET]
+    old = {n: logging.getLogger(n).level for n in names}
+    for n in names:
+        logging.getLogger(n).setLevel(logging.CRITICAL)
+    return old
+
+
+def probe(address: str, timeout: float) -> None:
+    """Connect to the scheduler at ``address`` and wait for its handshake, all within
+    ``timeout`` seconds: :class:`TimeoutError` (or :class:`OSError`) when it does not answer.
+    Dask's ``connect`` bounds the TCP connection, not the handshake that follows it."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def handshake():
+        comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout)
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), timeout + 1.0))
+    except TimeoutError:
+        raise TimeoutError(f"no answer within {timeout:g} s") from None
 
 
 def make_engine(workers: int | None = None, scheduler: str | None = None,
@@ -202,8 +293,12 @@ def make_engine(workers: int | None = None, scheduler: str | None = None,
         if workers is not None:
             raise InputError.from_line(f"--workers {workers}: local processes, not for Dask (its "
                                        "workers are the cluster's; --dask-local N sets them)")
+        if dask_local is not None and not 1 <= int(dask_local) <= max_workers():
+            raise InputError("--dask-local", dask_local, f"1..{max_workers()} workers "
+                             f"({WORKERS_PER_CORE} per core)")
         return DaskEngine(scheduler, dask_local, **dask_options)
     n = local_cores() if workers is None else int(workers)
-    if n < 1:
-        raise InputError("--workers", n, "at least 1")
+    if not 1 <= n <= max_workers():
+        raise InputError("--workers", n, f"1..{max_workers()} local processes "
+                         f"({WORKERS_PER_CORE} per core)")
     return Serial() if n == 1 else Processes(n)

@@ -5,8 +5,9 @@ results at the end.
 keeps at most ``engine.window`` cases in flight, and writes each case's record as soon as it
 returns. A case whose worker died (a killed process, a lost Dask worker) is retried once, on
 its own (so that a case that kills its worker cannot take an innocent one down with it
-twice); if it dies again it is recorded as lost. Ctrl-C (or any exception) stops the engine
-and leaves every finished case in the folder for the rerun.
+twice); if it dies again it is recorded as lost. Ctrl-C (or any exception, such as a lost Dask
+scheduler: :class:`~flexlift.sweep.executors.SchedulerLost`) stops the engine and leaves
+every finished case in the folder for the rerun.
 """
 
 from __future__ import annotations
@@ -142,6 +143,25 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
     return result
 
 
+#: cases whose cost is estimated to bound a sweep's per-case cost (spread over the sweep)
+COST_SAMPLE = 50
+
+
+def estimate_sweep(spec: SweepSpec, workers: int) -> tuple[float, float]:
+    """(the largest estimated cost of a case [s], the sweep's [s] on ``workers``): each case
+    is an ascent per control mode (:func:`flexlift.scenario.cost.estimate`), priced on up to
+    ``COST_SAMPLE`` cases spread over the sweep; cases x that cost / workers."""
+    from flexlift.scenario.cost import estimate
+
+    cases = make_cases(spec)
+    if not cases:
+        return 0.0, 0.0
+    step = max(1, len(cases) // COST_SAMPLE)
+    per = max(estimate(case_scenario(spec, c)).ascent_s for c in cases[::step][:COST_SAMPLE + 1])
+    per *= len(spec.controls)
+    return per, per * len(cases) / max(1, int(workers))
+
+
 def _failures(records: dict) -> int:
     return sum(r["status"] != "completed" for r in records.values())
 
@@ -177,6 +197,9 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
             records[case.index] = folder.write_case(names[case.index], record, datasets)
             if progress is not None:
                 progress(len(records), total, _failures(records))
+        check = getattr(engine, "check", None)
+        if check is not None:  # a lost Dask scheduler ends the sweep (executors.SchedulerLost)
+            check()
 
 
 def _submit(engine, spec, case: Case, attempts, inflight) -> None:
