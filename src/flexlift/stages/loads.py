@@ -174,7 +174,9 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
     checks = plan_checks(scenario, plant)
     summary["checks"] = {c.name: {"ok": c.ok, "message": c.message} for c in checks}
     summary["static_stress"] = stress_of(scenario, st)
-    warnings = list(plan.warnings) + [f"{c.name}: {c.message}" for c in checks if not c.ok]
+    summary["defaulted"] = dict(scenario.defaulted)  # derived or assumed, not given
+    warnings = (scenario.notes() + list(plan.warnings)
+                + [f"{c.name}: {c.message}" for c in checks if not c.ok])
     tables = _tables(summary) + [_check_table(checks)]
     s_ = summary["static_stress"]
     tables[1].rows.append(["max bending stress |M|/Z", s_["max_MPa"], "MPa", s_["x_m"], None])
