@@ -143,7 +143,7 @@ def test_run_stage_contract(tanker, tmp_path, capsys):
 def test_non_uniform_scenario_file(capsys, tmp_path):
     p = tmp_path / "hull.yaml"
     p.write_text(
-        "name: stepped\nhull:\n  elements: 4\n  displacement_t: null\n"
+        "name: stepped\nbased_on: tanker\nhull:\n  elements: 4\n  displacement_t: null\n"
         "  mass_per_length_kg_m: [30000, 40000, 50000, 40000]\n"
         "  bending_stiffness_Nm2: [2.0e12, 3.0e12, 3.0e12, 2.0e12]\n"
         "  point_masses: [{node: 1, mass_t: 50}]\n"

@@ -282,7 +282,7 @@ def test_other_malformed_yaml_is_one_line(tmp_path, text, needles):
 
 def test_yaml_1_2_exponents_are_numbers(tmp_path):
     # PyYAML reads 1e12 as text; with strict numbers that would be refused
-    s = load_scenario(_write(tmp_path, "hull:\n  bending_stiffness_Nm2: 2e12\n  breadth_m: 1E1\n"
+    s = load_scenario(_write(tmp_path, "based_on: tanker\nhull:\n  bending_stiffness_Nm2: 2e12\n  breadth_m: 1E1\n"
                              "disturbance:\n  current_m_s: -5.e-2\n  force_noise_N_m: .5e2\n"))
     assert s.hull.bending_stiffness_Nm2 == 2e12 and s.hull.breadth_m == 10.0
     assert s.disturbance.current_m_s == -0.05 and s.disturbance.force_noise_N_m == 50.0
@@ -457,7 +457,8 @@ def test_infinite_breakout_factor_was_an_overflow(tmp_path, capsys):
 
 
 def test_integers_are_real_numbers_and_whole_reals_are_integers():
-    s = parse_scenario({"hull": {"length_m": 78, "elements": 12.0, "bending_stiffness_Nm2": [3e12] * 12}})
+    s = parse_scenario({"based_on": "tanker",
+                        "hull": {"length_m": 78, "elements": 12.0, "bending_stiffness_Nm2": [3e12] * 12}})
     assert s.hull.length_m == 78.0 and isinstance(s.hull.length_m, float) and s.hull.elements == 12
     _refused({"hull": {"elements": 11.5}}, "hull.elements = 11.5", "fractional part")
 
@@ -514,9 +515,10 @@ def test_the_extremes_of_the_hull_ranges_still_compute(capsys):
 
     for hull in ({"length_m": 20_000.0, "bending_stiffness_Nm2": 1e3, "displacement_t": None,
                   "mass_per_length_kg_m": 0.01, "elements": 40},
-                 {"length_m": 1.0, "bending_stiffness_Nm2": 1e15, "displacement_t": 1e6, "breadth_m": 0.01,
-                  "elements": 2}):
-        modes = compute_modes(hull_from_scenario(parse_scenario({"hull": hull})))
+                 {"length_m": 1.0, "bending_stiffness_Nm2": 1e15, "displacement_t": 7e4,
+                  "breadth_m": 100.0, "depth_m": 100.0, "elements": 2}):  # ~ a steel block
+        modes = compute_modes(hull_from_scenario(parse_scenario({"hull": hull,
+                                                                 "based_on": "tanker"})))
         assert np.all(np.isfinite(modes.omega)) and modes.omega[2] > 0
     assert main(["modes", "--json"]) == 0
     json.loads(capsys.readouterr().out)

@@ -39,6 +39,12 @@ from pydantic import (
 from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
 from flexlift.scenario import cost
+from flexlift.scenario.defaults import (
+    complete_own_structure,
+    describes_own_structure,
+    missing_required,
+    plausibility,
+)
 from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
 from flexlift.scenario.messages import first_error, format_error
 from flexlift.scenario.pipe import Pipe, derive, underive
@@ -104,6 +110,9 @@ class Hull(_Section):
     depth_m: real(0.01, 100) = 5.4
     elements: whole(1, MAX_ELEMENTS) = 11
     displacement_t: real(0.001, MAX_MASS_T) | None = 3200.0  # 1 kg .. the largest ships
+    # the structure's submerged weight W'/g, when known directly (weighed, or from a stability
+    # booklet): replaces "the whole mass is steel"; spread like the mass (scenario/defaults.py)
+    submerged_weight_t: real(0.001, MAX_MASS_T) | None = None
     mass_per_length_kg_m: MassPerLength | list[MassPerLength] | None = None
     bending_stiffness_Nm2: Stiffness | list[Stiffness] = 3.0e12
     point_masses: Annotated[list[PointMass], Field(max_length=MAX_ELEMENTS + 1)] = []
@@ -460,6 +469,13 @@ class Scenario(_Section):
 
     name: Name = "tanker"  # names the output folder
     description: Annotated[Text, Field(max_length=10_000)] = ""
+    # a file that gives its own hull particulars (or a pipe) is completed by the rules of
+    # scenario/defaults.py, not with the tanker's values, unless it says based_on: tanker
+    based_on: Literal["tanker"] | None = None
+    # the keys flexlift derived or assumed for a structure of the user's own (listed in the
+    # report's design basis); written by flexlift, kept when its scenario.yaml is rerun
+    defaulted: Annotated[dict[Annotated[str, StringConstraints(max_length=80)],
+                              Literal["derived", "assumed"]], Field(max_length=100)] = {}
     environment: Environment = Environment()
     hull: Hull = Hull()
     pipe: Pipe | None = None  # a pipeline by its section: fills hull, lift.bags (scenario/pipe.py)
@@ -476,11 +492,26 @@ class Scenario(_Section):
     @model_validator(mode="before")
     @classmethod
     def _pipe(cls, data):
-        return derive(data)
+        own = describes_own_structure(data)
+        data = derive(data)
+        return complete_own_structure(data) if own else data
 
     @model_validator(mode="after")
     def _check(self) -> Scenario:
         env, sim = self.environment, self.simulation
+        missing = missing_required(self)
+        if missing:
+            raise ValueError(missing)
+        if self.pipe is None:
+            refusal, _ = plausibility(self.hull, env.steel_density_kg_m3)
+            if refusal:
+                raise ValueError(refusal)
+        if self.hull.submerged_weight_t is not None:
+            dry = self.hull_mass_t()
+            if not self.hull.submerged_weight_t < dry:
+                raise ValueError(
+                    f"hull.submerged_weight_t {self.hull.submerged_weight_t:g} t must be less "
+                    f"than the structure's mass ({dry:,.6g} t): in water it weighs less")
         if self.control.target_height_m >= env.water_depth_m:
             raise ValueError(
                 f"control.target_height_m {self.control.target_height_m} m must be below the "
@@ -500,6 +531,33 @@ class Scenario(_Section):
         return self
 
     # ------------------------------------------------------------------ conveniences
+    def hull_mass_t(self) -> float:
+        """The structure's mass with its point masses [t]."""
+        h = self.hull
+        if h.displacement_t is not None:
+            m = h.displacement_t
+        else:
+            per = h.mass_per_length_kg_m
+            per = per if isinstance(per, list) else [per] * h.elements
+            m = sum(per) * h.length_m / h.elements / C.TONNE
+        return m + sum(p.mass_t for p in h.point_masses)
+
+    def notes(self) -> list[str]:
+        """Warnings about the scenario itself: the values flexlift derived or assumed for a
+        structure of the user's own, and an implausible mass."""
+        from flexlift.scenario.defaults import assumed_summary
+
+        out = []
+        lines = assumed_summary(self)
+        if lines:
+            out.append(f"{len(lines)} value(s) not given were derived or assumed (see the "
+                       "design basis): " + "; ".join(lines))
+        if self.pipe is None:
+            _, warning = plausibility(self.hull, self.environment.steel_density_kg_m3)
+            if warning:
+                out.append(warning)
+        return out
+
     def to_yaml(self) -> str:
         """The scenario with every default filled in, as YAML (repeatable input)."""
         return dump_yaml(self.model_dump(mode="json"))

@@ -267,7 +267,9 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
     summary["checks"] = {c.name: {"ok": c.ok, "message": c.message} for c in checks}
     worst = max(case_sums, key=lambda n: case_sums[n]["static_stress"]["max_utilisation"])
     summary["static_stress"] = {**case_sums[worst]["static_stress"], "case": worst}
-    warnings = list(plan.warnings) + [f"{c.name}: {c.message}" for c in checks if not c.ok]
+    summary["defaulted"] = dict(scenario.defaulted)  # derived or assumed, not given
+    warnings = (scenario.notes() + list(plan.warnings)
+                + [f"{c.name}: {c.message}" for c in checks if not c.ok])
     tables = _tables(summary)
     tables.insert(2, _check_table(checks))
     figures: list[Figure] = []

@@ -172,7 +172,24 @@ def hull_from_scenario(scenario, elements: int | None = None) -> Hull:
         from flexlift.physics.pipe import element_density
 
         rho = element_density(scenario.pipe, scenario.environment.seawater_density_kg_m3)
+    elif h.submerged_weight_t is not None:
+        rho = _density_for(h.submerged_weight_t * C.TONNE, m, pm, h.length_m / n,
+                           scenario.environment)
     hull = Hull(h.length_m, EI, m, pm, breadth=h.breadth_m, depth=h.depth_m, density=rho)
     if elements is not None and int(elements) != n:
         hull = hull.refined(int(elements))
     return hull
+
+
+def _density_for(submerged_mass: float, m: np.ndarray, pm: np.ndarray, dx: float, env) -> float:
+    """The one mean density of the distributed mass [kg/m^3] that gives the submerged weight
+    ``submerged_mass`` g [kg] given directly (the point masses stay steel): from
+    M_d (1 - rho_w / rho) = W'/g - (point masses' own submerged mass)."""
+    rho_w, rho_s = env.seawater_density_kg_m3, env.steel_density_kg_m3
+    distributed = float(np.sum(m) * dx)
+    wet_distributed = submerged_mass - float(np.sum(pm)) * (1.0 - rho_w / rho_s)
+    if not 0.0 < wet_distributed < distributed:
+        raise InputError("hull.submerged_weight_t", submerged_mass / C.TONNE,
+                         "more than the point masses' own submerged weight and less than the "
+                         "distributed mass [t]")
+    return rho_w / (1.0 - wet_distributed / distributed)
