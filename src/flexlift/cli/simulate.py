@@ -38,8 +38,7 @@ def add_parser(sub) -> None:
 def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
     with writing(args.out, "simulate") as folder:
-        out = run_stage(scenario, folder, control=args.control, duration=args.duration,
-                        primary=True)
+        out = run_stage(scenario, folder, control=args.control, duration=args.duration)
         if folder is not None:
             copy_controller_files(scenario, folder)  # the user's .fis files, with checksums
     s = out.summary

@@ -73,3 +73,27 @@ def point_stats(values: np.ndarray, point: LiftPoint) -> tuple[np.ndarray, np.nd
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN row is NaN, as said
         return np.nanmean(v, axis=1), np.nanmin(v, axis=1), np.nanmax(v, axis=1)
+
+
+#: the variables whose spread over a lift point's bags (min, max) the CSV also holds
+SPREAD_VARS = ("height",)
+
+
+def point_columns(ds, names: list[str]):
+    """(column header, values over time) of the bag variables ``names`` by lift point: a lone
+    bag's column is ``"height_bag_5 [m]"`` (as before lift points); a cluster's is the mean over
+    its bags, ``"height_bag_1-bag_8_mean [m]"``, and for :data:`SPREAD_VARS` also ``_min`` and
+    ``_max``."""
+    points = lift_points(ds)
+    for name in names:
+        unit = ds[name].attrs["units"]
+        values = ds[name].values
+        for p in points:
+            mean, lo, hi = point_stats(values, p)
+            if p.count == 1:
+                yield f"{name}_{p.label} [{unit}]", mean
+                continue
+            yield f"{name}_{p.label}_mean [{unit}]", mean
+            if name in SPREAD_VARS:
+                yield f"{name}_{p.label}_min [{unit}]", lo
+                yield f"{name}_{p.label}_max [{unit}]", hi
