@@ -30,13 +30,17 @@ def _legend_entries(fig) -> int:
 @pytest.fixture(scope="module")
 def hundred(tmp_path_factory, tanker):
     """``flexlift run``'s stages on the tanker planned with 36.5 t catalogue bags (100 bags at
-    10 lift points), 400 s of ascent, every figure drawn here and its legends counted."""
+    10 lift points; bag_2's supply fails), 400 s of the run, every figure drawn here and its
+    legends counted."""
     from flexlift.output.report import render_report
     from flexlift.stages.run import run_all
 
     sc = tanker.with_changes(**{"lift.layout": "balanced", "lift.internal_bags": 0,
                                 "lift.catalogue_bag.lift_t": 36.5,
-                                "simulation.duration_s": 400.0})
+                                "simulation.duration_s": 400.0,
+                                # one bag of the aft cluster gets no gas: its cluster spreads
+                                "faults": [{"kind": "supply_failure", "bag": "bag_2",
+                                            "time_s": 1.0}]})
     out = tmp_path_factory.mktemp("hundred")
     legends: dict[str, int] = {}
     real_save = _style.save
@@ -122,37 +126,44 @@ def test_no_file_written_twice(hundred):
 
 
 def test_grouped_figure_and_csv_hold_the_per_bag_numbers(hundred):
-    """The bag figure's line and band of each lift point, and the CSV's columns, against the
-    per-bag heights in results.nc."""
+    """The bag figure's line and band of each lift point (heights over the whole run, net
+    flow in the zoom window), and the CSV's columns, against the per-bag data in results.nc."""
     _, out, _, _ = hundred
     for mode in MODES:
         r = load_netcdf(out / "results.nc", mode)
         ds = r.dataset
-        h = ds.height.values
         points = lift_points(ds)
         fig = ascent.bag_histories(r)
-        over = fig.axes[0]
-        lines = {ln.get_label(): ln for ln in over.get_lines()}
-        bands = [c for c in over.collections if isinstance(c, PolyCollection)]
-        assert len(bands) == sum(p.count > 1 for p in points)
-        bands = iter(bands)
-        for p in points:
-            per_bag = h[:, p.index]
-            np.testing.assert_allclose(lines[p.label].get_ydata(), per_bag.mean(axis=1),
-                                       rtol=1e-12, atol=1e-12)
-            if p.count > 1:
-                y = next(bands).get_paths()[0].vertices[:, 1]
-                assert y.min() == pytest.approx(per_bag.min(), abs=1e-9)
-                assert y.max() == pytest.approx(per_bag.max(), abs=1e-9)
+        t = ds.time.values
+        for ax, name in ((fig.axes[0], "height"), (fig.axes[5], "net_flow")):
+            x0 = ax.get_lines()[0].get_xdata()
+            rows = np.flatnonzero((t >= x0[0]) & (t <= x0[-1]))
+            lines = {ln.get_label(): ln for ln in ax.get_lines()}
+            bands = iter(c for c in ax.collections if isinstance(c, PolyCollection))
+            for p in points:
+                per_bag = ds[name].values[rows][:, p.index]
+                np.testing.assert_allclose(lines[p.label].get_ydata(), per_bag.mean(axis=1),
+                                           rtol=1e-12, atol=1e-15, err_msg=f"{name} {p.label}")
+                if p.count > 1:
+                    y = next(bands).get_paths()[0].vertices[:, 1]
+                    assert y.min() == pytest.approx(per_bag.min(), abs=1e-12)
+                    assert y.max() == pytest.approx(per_bag.max(), abs=1e-12)
+            assert next(bands, None) is None  # a band for each cluster, no other
+        aft = points[0]
+        assert "bag_2" in aft.bags and np.ptp(ds.gas_volume.values[:, aft.index], axis=1).max() > 0.1
         plt.close(fig)
         rows = _rows(out / "tables" / f"simulate_{mode}_time_histories.csv")
         table = {k: np.array([float(r[k] or "nan") for r in rows]) for k in rows[0]}
         for p in points:
-            col = f"height_{p.label}_mean [m]" if p.count > 1 else f"height_{p.label} [m]"
-            np.testing.assert_allclose(table[col], h[:, p.index].mean(axis=1), rtol=5.01e-6)  # %.6g
+            for name in ("height", "gas_volume"):
+                unit = ds[name].attrs["units"]
+                col = f"{name}_{p.label}_mean [{unit}]" if p.count > 1 else f"{name}_{p.label} [{unit}]"
+                np.testing.assert_allclose(table[col], ds[name].values[:, p.index].mean(axis=1),
+                                           rtol=5.01e-6, atol=1e-12)  # %.6g
             if p.count > 1:
                 np.testing.assert_allclose(table[f"height_{p.label}_max [m]"],
-                                           h[:, p.index].max(axis=1), rtol=5.01e-6)  # %.6g
+                                           ds.height.values[:, p.index].max(axis=1),
+                                           rtol=5.01e-6)
 
 
 def test_report_by_lift_point(hundred):
