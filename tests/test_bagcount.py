@@ -203,4 +203,12 @@ def test_results_nc_round_trip_modes_of_different_lengths(tanker, tmp_path):
             want = v.values.astype(np.float32) if name in FLOAT32_VARS else v.values
             np.testing.assert_array_equal(back[name].values, want, err_msg=name)
             assert back[name].dtype == v.dtype, name
-    assert runs[0].dataset.time.size > runs[1].dataset.time.size
+    n0, n1 = runs[0].dataset.time.size, runs[1].dataset.time.size
+    assert n0 > n1
+    import xarray as xr
+
+    with xr.open_dataset(tmp_path / "r.nc", engine="scipy") as f:
+        assert f.sizes["row"] == n0 and list(f["rows"].values) == [n0, n1]
+        assert np.isnan(f["height"].values[1, n1:]).all()  # the shorter run padded with NaN
+        assert np.isfinite(f["height"].values[1, :n1]).all()
+        assert f["height"].dtype == np.float64 and f["pitch_rate"].dtype == np.float32
