@@ -212,3 +212,32 @@ def test_results_nc_round_trip_modes_of_different_lengths(tanker, tmp_path):
         assert np.isnan(f["height"].values[1, n1:]).all()  # the shorter run padded with NaN
         assert np.isfinite(f["height"].values[1, :n1]).all()
         assert f["height"].dtype == np.float64 and f["pitch_rate"].dtype == np.float32
+
+
+def test_results_nc_stores_a_cluster_once_and_reads_every_bag_back(tanker, tmp_path):
+    """Bags of one lift point with equal histories are stored once per point; one that
+    differs (a bag's gas, here) keeps its column per bag; every bag reads back exactly."""
+    import xarray as xr
+
+    from flexlift.ascent import simulate
+    from flexlift.ascent.result import Result
+    from flexlift.output.modesfile import FLOAT32_VARS
+    from flexlift.output.results import save_netcdf
+
+    r = simulate(tanker, duration=60.0)
+    take = [0, 0, 0, 1, 1, 2, 3, 4, 5, 6]  # clusters of 3 and 2 at the first two points
+    ds = r.dataset.isel(bag=take).assign_coords(bag=[f"bag_{k}" for k in range(1, 11)])
+    gas = ds.gas_volume.values.copy()
+    gas[-1, 1] += 1e-9  # one bit of one bag of the first cluster
+    ds["gas_volume"] = (ds.gas_volume.dims, gas, ds.gas_volume.attrs)
+    clustered = Result(ds)
+    save_netcdf(clustered, tmp_path / "r.nc")
+    with xr.open_dataset(tmp_path / "r.nc", engine="scipy") as f:
+        assert f.sizes["point"] == 7 and f["height"].dims == ("mode", "row", "point")
+        assert f["gas_volume"].dims == ("mode", "row", "bag")
+        assert list(f["bag_point"].values) == [0, 0, 0, 1, 1, 2, 3, 4, 5, 6]
+    back = load_netcdf(tmp_path / "r.nc").dataset
+    for name, v in ds.variables.items():
+        want = v.values.astype(np.float32) if name in FLOAT32_VARS else v.values
+        np.testing.assert_array_equal(back[name].values, want, err_msg=name)
+        assert back[name].dims == v.dims and back[name].attrs == v.attrs, name

@@ -21,7 +21,7 @@ SAME_POINT_M = 1e-6
 class LiftPoint:
     """One lift point of a result.
 
-    label : the bag's name for a lone bag, ``"bag_1-bag_8"`` for a run of names (or
+    label : the bag's name for a lone bag, ``"bag_1..bag_8"`` for a run of names (or
         ``"bag_3+7"``, the first and how many more, otherwise)
     kind : "external" or "internal"
     x : position from the aft end [m] (an internal bag's point: the middle of its span)
@@ -45,7 +45,7 @@ def _label(names: list[str]) -> str:
     nums = [n.removeprefix("bag_") for n in names]
     if all(s.isdigit() for s in nums) and [int(s) for s in nums] == list(
             range(int(nums[0]), int(nums[0]) + len(nums))):
-        return f"{names[0]}-{names[-1]}"
+        return f"{names[0]}..{names[-1]}"  # as the lift plan figure names a cluster
     return f"{names[0]}+{len(names) - 1}"
 
 
@@ -82,7 +82,7 @@ SPREAD_VARS = ("height",)
 def point_columns(ds, names: list[str]):
     """(column header, values over time) of the bag variables ``names`` by lift point: a lone
     bag's column is ``"height_bag_5 [m]"`` (as before lift points); a cluster's is the mean over
-    its bags, ``"height_bag_1-bag_8_mean [m]"``, and for :data:`SPREAD_VARS` also ``_min`` and
+    its bags, ``"height_bag_1..bag_8_mean [m]"``, and for :data:`SPREAD_VARS` also ``_min`` and
     ``_max``."""
     points = lift_points(ds)
     for name in names:
