@@ -231,7 +231,7 @@ def test_results_nc_stores_a_cluster_once_and_reads_every_bag_back(tanker, tmp_p
     gas[-1, 1] += 1e-9  # one bit of one bag of the first cluster
     ds["gas_volume"] = (ds.gas_volume.dims, gas, ds.gas_volume.attrs)
     clustered = Result(ds)
-    save_netcdf(clustered, tmp_path / "r.nc")
+    save_netcdf([clustered], tmp_path / "r.nc")
     with xr.open_dataset(tmp_path / "r.nc", engine="scipy") as f:
         assert f.sizes["point"] == 7 and f["height"].dims == ("mode", "row", "point")
         assert f["gas_volume"].dims == ("mode", "row", "bag")

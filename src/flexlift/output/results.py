@@ -18,15 +18,20 @@ __all__ = ["BAG_VARS", "CRITERIA", "HULL_VARS", "Result", "add_to_netcdf", "load
 
 
 def save_netcdf(result: Result | list[Result], path) -> Path:
-    """Write a result, or the results of several control modes, as netCDF 3 (scipy engine),
-    atomically, in the layout of :mod:`flexlift.output.modesfile` (a ``mode`` dimension);
-    returns the path."""
-    from flexlift.output.modesfile import stack
+    """Write a result as netCDF 3 (scipy engine), atomically; returns the path. A list of
+    results (one per control mode, as ``results.nc`` holds them) is written in the layout of
+    :mod:`flexlift.output.modesfile` (a ``mode`` dimension); a single result as its dataset
+    (a sweep's case histories)."""
     from flexlift.plumbing.atomic import atomic_file
 
     path = Path(path)
-    results = result if isinstance(result, list) else [result]
-    ds = stack([r.dataset for r in results])
+    if isinstance(result, list):
+        from flexlift.output.modesfile import stack
+
+        ds = stack([r.dataset for r in result])
+    else:
+        ds = result.dataset.copy()
+        ds["bag_kind"] = ds["bag_kind"].astype("S8")
     with atomic_file(path, suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="scipy")
     return path
@@ -36,13 +41,9 @@ def add_to_netcdf(result: Result, path) -> Path:
     """Add ``result``'s control mode to the file at ``path`` (written by :func:`save_netcdf`;
     a mode already there is replaced, a missing file is created); returns the path."""
     path = Path(path)
-    others = []
+    others: list[Result] = []
     if path.is_file():
-        from flexlift.output.modesfile import modes_of
-
-        with xr.open_dataset(path, engine="scipy") as ds:
-            modes = modes_of(ds)
-        others = [load_netcdf(path, m) for m in modes if m != result.control]
+        others = [load_netcdf(path, m) for m in netcdf_modes(path) if m != result.control]
     return save_netcdf(others + [result], path)
 
 
