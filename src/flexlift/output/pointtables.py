@@ -59,7 +59,7 @@ def point_tables(result, mode: str) -> tuple[Table, Table]:
 
 def event_rows(result) -> list[list]:
     """The events as table rows (time [s], kind, bag, detail), those of one kind on the bags
-    of one lift point merged into one row at the first of them ("8 bags, to 3446.0 s")."""
+    of one lift point merged into one row at the first of them ("8 bags, the last at 3446.0 s")."""
     points = lift_points(result.dataset)
     where = {b: p for p in points for b in p.bags}
     merged: dict[tuple, list[dict]] = {}
@@ -73,7 +73,8 @@ def event_rows(result) -> list[list]:
     for (kind, label, detail), es in merged.items():
         times = [e["time_s"] for e in es]
         n = len({e["bag"] for e in es})
-        more = f"{n} bag(s), {len(es)} event(s), to {max(times):.1f} s"
+        count = f"{n} bags" if n == len(es) else f"{n} bags, {len(es)} events"
+        more = f"{count}, the last at {max(times):.1f} s"
         rows.append([min(times), kind, label, f"{detail}; {more}" if detail else more])
     rows.sort(key=lambda r: r[0])
     return rows
