@@ -241,3 +241,45 @@ def test_results_nc_stores_a_cluster_once_and_reads_every_bag_back(tanker, tmp_p
         want = v.values.astype(np.float32) if name in FLOAT32_VARS else v.values
         np.testing.assert_array_equal(back[name].values, want, err_msg=name)
         assert back[name].dims == v.dims and back[name].attrs == v.attrs, name
+
+
+def test_seven_bags_events_and_columns_as_before(tanker):
+    """The tanker's lift points are its seven bags: its event rows and CSV columns are those
+    of one bag each, as they were before lift points."""
+    from flexlift.ascent import simulate
+    from flexlift.ascent.result import BAG_VARS
+    from flexlift.output.liftpoints import point_columns
+    from flexlift.output.pointtables import event_rows
+
+    r = simulate(tanker, duration=60.0)
+    assert [p.count for p in lift_points(r.dataset)] == [1] * 7
+    assert event_rows(r) == [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")]
+                             for e in r.events]
+    cols = [c for c, _ in point_columns(r.dataset, list(BAG_VARS))]
+    assert cols == [f"{n}_{b} [{r.dataset[n].attrs['units']}]" for n in BAG_VARS
+                    for b in r.dataset.bag.values]
+
+
+def test_events_of_a_cluster_merge_into_one_row(hundred):
+    """An arrival of each of the 100 bags (written into the run's dataset) makes one row per
+    lift point, at its first bag's time, saying how many and the last time."""
+    import json
+
+    from flexlift.ascent.result import Result
+    from flexlift.output.pointtables import event_rows
+
+    _, out, _, _ = hundred
+    ds = load_netcdf(out / "results.nc").dataset.copy()
+    bags = [str(b) for b in ds.bag.values]
+    events = [{"time_s": 1000.0 + k, "kind": "arrival", "bag": b} for k, b in enumerate(bags)]
+    ds.attrs["events"] = json.dumps([{"time_s": 10.0, "kind": "separation", "bag": None}] + events)
+    rows = event_rows(Result(ds))
+    points = lift_points(ds)
+    assert len(rows) == 1 + len(points)
+    assert rows[0][:3] == [10.0, "separation", ""]
+    for p in points:
+        row = next(r for r in rows if r[2] == p.label)
+        first, last = 1000.0 + p.index.min(), 1000.0 + p.index.max()
+        assert row[0] == first and row[1] == "arrival"
+        if p.count > 1:
+            assert row[3] == f"{p.count} bags, the last at {last:.1f} s"
