@@ -283,3 +283,23 @@ def test_events_of_a_cluster_merge_into_one_row(hundred):
         assert row[0] == first and row[1] == "arrival"
         if p.count > 1:
             assert row[3] == f"{p.count} bags, the last at {last:.1f} s"
+
+
+def test_results_nc_modes_with_other_bags_and_no_strength_grid(tanker, tmp_path):
+    """The paper's plant has the four external bags only and no strength grid: in one file
+    with a seven-bag mode, each reads back with its own bags and variables."""
+    from flexlift.ascent import simulate
+    from flexlift.output.modesfile import FLOAT32_VARS
+    from flexlift.output.results import save_netcdf
+
+    runs = [simulate(tanker, control=m, duration=d) for m, d in (("paper", 50.0),
+                                                                 ("decentralized", 70.0))]
+    assert runs[0].dataset.bag.size == 4 and "x" not in runs[0].dataset.coords
+    save_netcdf(runs, tmp_path / "r.nc")
+    for r in runs:
+        back = load_netcdf(tmp_path / "r.nc", r.control).dataset
+        assert back.sizes == r.dataset.sizes and set(back.variables) == set(r.dataset.variables)
+        for name, v in r.dataset.variables.items():
+            want = v.values.astype(np.float32) if name in FLOAT32_VARS else v.values
+            np.testing.assert_array_equal(back[name].values, want, err_msg=name)
+            assert back[name].dtype == v.dtype and back[name].dims == v.dims, name

@@ -42,12 +42,34 @@ def _padded(a: np.ndarray, n: int) -> np.ndarray:
     return np.concatenate([a, pad])
 
 
+def _fill(dtype) -> object:
+    """The padding of an array of ``dtype``: NaN, an empty string, or 0."""
+    return np.nan if dtype.kind == "f" else "" if dtype.kind in "US" else 0
+
+
+def _spread(a: np.ndarray, dims: tuple, pos: np.ndarray, n_bags: int) -> np.ndarray:
+    """``a`` with its ``bag`` axis (if any) placed at ``pos`` of ``n_bags``, padded."""
+    if "bag" not in dims:
+        return a
+    ax = dims.index("bag")
+    shape = a.shape[:ax] + (n_bags,) + a.shape[ax + 1:]
+    full = np.full(shape, _fill(a.dtype), dtype=a.dtype)
+    full[(slice(None),) * ax + (pos,)] = a
+    return full
+
+
 def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
-    """The datasets of several control modes (``attrs["control"]`` names each) as one."""
+    """The datasets of several control modes (``attrs["control"]`` names each) as one. The
+    ``bag`` dimension is the union of the modes' bags (the paper's plant has the external bags
+    only): a bag a mode has not is padded like a missing row."""
     modes = [d.attrs["control"] for d in datasets]
     if len(set(modes)) != len(modes):
         raise ValueError(f"one dataset per control mode, got {modes}")
     sizes = {dim: max((d.sizes.get(dim, 0) for d in datasets), default=0) for dim in _TIMES}
+    bags = list(dict.fromkeys(str(b) for d in datasets if "bag" in d.coords
+                              for b in d.bag.values))
+    pos = {d.attrs["control"]: np.array([bags.index(str(b)) for b in d.bag.values], dtype=int)
+           if "bag" in d.coords else np.zeros(0, dtype=int) for d in datasets}
     names: dict[str, None] = {}
     for d in datasets:
         names.update(dict.fromkeys(list(d.data_vars) + [c for c in _TIMES if c in d.coords]))
@@ -55,16 +77,17 @@ def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
     for name in names:
         template[name] = next(d[name] for d in datasets if name in d.variables)
     data = {}
-    first_of_point, bag_point = _points(datasets[0])
+    first_of_point, bag_point = _points(datasets, bags)
     for name, tv in template.items():
         dims = tuple(_TIMES.get(dim, dim) for dim in tv.dims)
         parts = []
         for d in datasets:
-            if name in d.variables:
-                a = d[name].values
-            else:  # a variable this mode has not (its plant had no strength grid)
-                shape = tuple(d.sizes.get(dim, tv.sizes[dim]) for dim in tv.dims)
-                a = np.full(shape, np.nan)
+            if name not in d.variables:  # a variable this mode has not (no strength grid)
+                shape = tuple(sizes[dim] if dim in _TIMES else len(bags) if dim == "bag"
+                              else tv.sizes[dim] for dim in tv.dims)
+                parts.append(np.full(shape, _fill(tv.dtype), dtype=tv.dtype))
+                continue
+            a = _spread(d[name].values, tv.dims, pos[d.attrs["control"]], len(bags))
             if tv.dims and tv.dims[0] in _TIMES:
                 a = _padded(a, sizes[tv.dims[0]])
             parts.append(a)
@@ -87,13 +110,16 @@ def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
                                                   for d in datasets], np.int32),
                              {"units": "1", "long_name": "rows of the mode's strength samples"})
     coords = {"mode": ("mode", np.array(modes, dtype="S"))}
+    if bags:
+        coords["bag"] = ("bag", np.array(bags, dtype="S"))
     for d in datasets:
-        for c in ("bag", "x"):
-            if c in d.coords and c not in coords:
-                coords[c] = (c, d[c].values, dict(d[c].attrs))
+        if "x" in d.coords and "x" not in coords:
+            coords["x"] = ("x", d["x"].values, dict(d["x"].attrs))
     meta = {d.attrs["control"]: {"attrs": dict(d.attrs),
                                  "variables": list(d.data_vars),
-                                 "coords": list(d.coords)} for d in datasets}
+                                 "coords": list(d.coords),
+                                 "bags": [str(b) for b in d.bag.values] if "bag" in d.coords
+                                 else []} for d in datasets}
     first = datasets[0].attrs
     attrs = {"title": f"flexlift ascent of {first.get('scenario', '')}, control modes: "
                       f"{', '.join(modes)}",
@@ -101,8 +127,6 @@ def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
              "scenario_checksum": first.get("scenario_checksum", ""),
              "modes": " ".join(modes),
              "mode_attrs": json.dumps(meta)}
-    if "bag" in coords:
-        coords["bag"] = ("bag", np.array([str(b) for b in coords["bag"][1]], dtype="S"))
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
@@ -110,12 +134,22 @@ def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
 _STORED = "stored_by_point"
 
 
-def _points(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
-    """(the first bag of each lift point, each bag's point) along ``bag``."""
+def _points(datasets: list[xr.Dataset], bags: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """(the first bag of each lift point, each bag's point) along the union ``bags``."""
     from flexlift.output.liftpoints import lift_points
 
-    points = lift_points(ds) if "bag_x" in ds and "bag_kind" in ds else []
-    bag_point = np.zeros(ds.sizes.get("bag", 0), dtype=int)
+    x, kind = {}, {}
+    for d in datasets:
+        if "bag_x" in d and "bag_kind" in d:
+            for b, xb, k in zip(d.bag.values, d.bag_x.values, d.bag_kind.values):
+                x.setdefault(str(b), float(xb))
+                kind.setdefault(str(b), str(k))
+    bag_point = np.zeros(len(bags), dtype=int)
+    if len(x) != len(bags):
+        return np.zeros(0, dtype=int), bag_point
+    union = xr.Dataset({"bag_x": ("bag", [x[b] for b in bags]),
+                        "bag_kind": ("bag", [kind[b] for b in bags])}, coords={"bag": bags})
+    points = lift_points(union)
     for j, p in enumerate(points):
         bag_point[p.index] = j
     return np.array([p.index[0] for p in points], dtype=int), bag_point
@@ -144,6 +178,9 @@ def unstack(ds: xr.Dataset, mode: str | None = None) -> xr.Dataset:
     k = modes.index(mode)
     meta = json.loads(ds.attrs["mode_attrs"])[mode]
     cut = {"row": int(ds["rows"].values[k]), "strength_row": int(ds["strength_rows"].values[k])}
+    union = [b.decode() if isinstance(b, bytes) else str(b) for b in ds["bag"].values] \
+        if "bag" in ds.coords else []
+    mine = np.array([union.index(b) for b in meta["bags"]], dtype=int)
 
     def one(name):
         v = ds[name]
@@ -155,6 +192,8 @@ def unstack(ds: xr.Dataset, mode: str | None = None) -> xr.Dataset:
             attrs.pop(_STORED, None)
         if dims and dims[0] in cut:
             a = a[:cut[dims[0]]]
+        if "bag" in dims:  # the mode's own bags of the union
+            a = np.take(a, mine, axis=dims.index("bag"))
         if a.dtype == np.float32:
             a = a.astype(np.float64)
         elif a.dtype.kind == "S":
@@ -166,6 +205,8 @@ def unstack(ds: xr.Dataset, mode: str | None = None) -> xr.Dataset:
     for c in meta["coords"]:
         if c in _TIMES:
             coords[c] = one(c)
+        elif c == "bag":
+            coords[c] = (c, np.array(meta["bags"]), dict(ds[c].attrs))
         else:
             vals = ds[c].values
             coords[c] = (c, vals.astype(str) if vals.dtype.kind == "S" else vals,
