@@ -66,14 +66,17 @@ def test_run_stage_writes_figures_and_tables(tmp_path, tanker):
         assert f.path.stat().st_size > 10_000 and f.caption
     csv = (tmp_path / "tables" / "reduce_comparison.csv").read_text().splitlines()
     assert len(csv) == 1 + len(METHODS)
-    assert "heave, pitch; flexible 1" in csv[1]
+    assert "heave, pitch; flexible 1" in csv[1] and csv[1].startswith("bag_1,")
+    worst = (tmp_path / "tables" / "reduce_worst.csv").read_text().splitlines()
+    assert len(worst) == 1 + len(METHODS)
     gains = list(_csv.reader((tmp_path / "tables" / "reduce_gains.csv").open()))
     assert gains[0] == ["mode", "kind", "frequency [Hz]", "bag_1 [m/N]"]
     assert len(gains) == 25 and [r[0] for r in gains[1:4]] == ["heave", "pitch", "1"]
     assert [r[1] for r in gains[1:4]] == ["rigid", "rigid", "flexible"]
     assert [float(r[3]) for r in gains[1:]] == pytest.approx(res.summary["gains_m_per_N"])
-    comparison, per_mode = res.tables
-    assert comparison.in_report and comparison.csv == "reduce_comparison.csv"
+    worst, comparison, per_mode = res.tables
+    assert worst.in_report and worst.csv == "reduce_worst.csv"
+    assert not comparison.in_report and comparison.csv == "reduce_comparison.csv"
     assert not per_mode.in_report and per_mode.csv == "reduce_gains.csv"
     assert "ω_lo" in res.tables[0].note and "most accurate" in res.summary["conclusion"]
 

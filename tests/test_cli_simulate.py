@@ -27,8 +27,10 @@ def test_simulate_writes_files(tmp_path, capsys):
     assert main(["simulate", str(sc), "--duration", "700", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "criteria:" in text
-    assert (out / "data" / "simulate_decentralized.nc").is_file()
-    assert (out / "results.nc").is_file()
+    from flexlift.output.results import netcdf_modes
+
+    assert netcdf_modes(out / "results.nc") == ["decentralized"]
+    assert not (out / "data").exists()  # results.nc is the one netCDF
     assert (out / "tables" / "simulate_decentralized_time_histories.csv").is_file()
     for f in ("bags", "hull", "moment"):
         assert (out / "figures" / f"simulate_decentralized_{f}.png").stat().st_size > 1000

@@ -71,7 +71,7 @@ def test_simulate_writes_through_the_writer(users_folder, tmp_path, capsys):
     _one_line(capsys, "did not write")
     out = tmp_path / "sim"
     assert main(["simulate", "--duration", "5", "--out", str(out), "--json"]) == 0
-    assert (out / "results.nc").is_file() and (out / "data").is_dir()
+    assert (out / "results.nc").is_file() and (out / "tables").is_dir()
     assert read_marker(out)["command"] == "simulate"
 
 

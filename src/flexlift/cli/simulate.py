@@ -41,8 +41,7 @@ def _main(args: argparse.Namespace) -> int:
     # --duration is simulation.duration_s: checked with the scenario's other keys (steps, rows)
     with_options(scenario, {"--duration": ("simulation.duration_s", args.duration)})
     with writing(args.out, "simulate") as folder:
-        out = run_stage(scenario, folder, control=args.control, duration=args.duration,
-                        primary=True)
+        out = run_stage(scenario, folder, control=args.control, duration=args.duration)
         if folder is not None:
             copy_controller_files(scenario, folder)  # the user's .fis files, with checksums
     s = out.summary

@@ -13,26 +13,59 @@ import xarray as xr
 
 from flexlift.ascent.result import BAG_VARS, CRITERIA, HULL_VARS, Result
 
-__all__ = ["BAG_VARS", "CRITERIA", "HULL_VARS", "Result", "load_netcdf", "save_netcdf", "to_csv"]
+__all__ = ["BAG_VARS", "CRITERIA", "HULL_VARS", "Result", "add_to_netcdf", "load_netcdf",
+           "netcdf_modes", "save_netcdf", "to_csv"]
 
 
-def save_netcdf(result: Result, path) -> Path:
-    """Write the dataset as netCDF 3 (scipy engine), atomically; returns the path."""
+def save_netcdf(result: Result | list[Result], path) -> Path:
+    """Write a result as netCDF 3 (scipy engine), atomically; returns the path. A list of
+    results (one per control mode, as ``results.nc`` holds them) is written in the layout of
+    :mod:`flexlift.output.modesfile` (a ``mode`` dimension); a single result as its dataset
+    (a sweep's case histories)."""
     from flexlift.plumbing.atomic import atomic_file
 
     path = Path(path)
-    ds = result.dataset.copy()
-    ds["bag_kind"] = ds["bag_kind"].astype("S8")
+    if isinstance(result, list):
+        from flexlift.output.modesfile import stack
+
+        ds = stack([r.dataset for r in result])
+    else:
+        ds = result.dataset.copy()
+        ds["bag_kind"] = ds["bag_kind"].astype("S8")
     with atomic_file(path, suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="scipy")
     return path
 
 
-def load_netcdf(path) -> Result:
-    """Read a result written by :func:`save_netcdf` (a file of an earlier version, whose
-    ``lift`` held the sling force, is read with it named ``sling_force``)."""
+def add_to_netcdf(result: Result, path) -> Path:
+    """Add ``result``'s control mode to the file at ``path`` (written by :func:`save_netcdf`;
+    a mode already there is replaced, a missing file is created); returns the path."""
+    path = Path(path)
+    others: list[Result] = []
+    if path.is_file():
+        others = [load_netcdf(path, m) for m in netcdf_modes(path) if m != result.control]
+    return save_netcdf(others + [result], path)
+
+
+def netcdf_modes(path) -> list[str]:
+    """The control modes in a file written by :func:`save_netcdf`, in order."""
+    from flexlift.output.modesfile import modes_of
+
+    with xr.open_dataset(path, engine="scipy") as ds:
+        return modes_of(ds) if "mode" in ds.dims else [ds.attrs["control"]]
+
+
+def load_netcdf(path, mode: str | None = None) -> Result:
+    """Read one control mode (the file's first when None) of a file written by
+    :func:`save_netcdf` (or a single result as flexlift wrote it before the ``mode``
+    dimension; a file of an earlier version, whose ``lift`` held the sling force, is read
+    with it named ``sling_force``)."""
+    from flexlift.output.modesfile import unstack
+
     with xr.open_dataset(path, engine="scipy") as ds:
         ds = ds.load()
+    if "mode" in ds.dims:
+        return Result(unstack(ds, mode))
     for name in ("bag", "bag_kind"):
         if ds[name].dtype.kind == "S":
             ds[name] = ds[name].astype(str)
@@ -44,8 +77,10 @@ def load_netcdf(path) -> Result:
 
 
 def to_csv(result: Result, folder, prefix: str = "simulate") -> list[Path]:
-    """Write the time histories (one column per variable and bag, units in the headers) and
-    the strength envelopes as CSV under ``folder``; returns the paths."""
+    """Write the time histories (one column per variable and lift point, units in the
+    headers: :func:`flexlift.output.liftpoints.point_columns`) and the strength envelopes as
+    CSV under ``folder``; returns the paths. Every bag's own histories are in the netCDF."""
+    from flexlift.output.liftpoints import point_columns
     from flexlift.plumbing.atomic import write_text
 
     ds = result.dataset
@@ -55,10 +90,10 @@ def to_csv(result: Result, folder, prefix: str = "simulate") -> list[Path]:
     for name in HULL_VARS:
         cols.append(f"{name} [{ds[name].attrs['units']}]")
         arrays.append(ds[name].values)
-    for name in [*BAG_VARS, *(["buoyancy"] if "buoyancy" in ds else [])]:
-        for k, b in enumerate(ds.bag.values):
-            cols.append(f"{name}_{b} [{ds[name].attrs['units']}]")
-            arrays.append(ds[name].values[:, k])
+    names = [*BAG_VARS, *(["buoyancy"] if "buoyancy" in ds else [])]
+    for col, arr in point_columns(ds, names):  # by lift point: see its docstring
+        cols.append(col)
+        arrays.append(arr)
     paths = [write_text(folder / f"{prefix}_time_histories.csv", _csv(cols, np.column_stack(arrays)))]
     if "x" in ds.coords:
         names = ["moment_max", "moment_min", "shear_max", "shear_min"]

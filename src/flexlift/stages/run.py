@@ -86,7 +86,6 @@ def _run_stages(scenario, out: Path, stages, controls, progress) -> list[StageOu
                         out,
                         control=mode,
                         progress=lambda f, m=mode: progress.bar(f, m),
-                        primary=mode == controls[0],  # its dataset is results.nc
                     )
                 )
             if len(controls) > 1:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from flexlift.errors import SimulationError
+from flexlift.output.pointtables import event_rows, point_tables
 from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.scenario import ControlMode
 
@@ -30,23 +31,26 @@ def static_view(scenario) -> dict:
             "utilisation": utilisation_along(scenario, st)}
 
 
-def _write(result, out: Path, mode: str, primary: bool, seabed: dict | None = None
-           ) -> list[Figure]:
+def _write(result, out: Path, mode: str, seabed: dict | None = None,
+           tables: tuple[Table, ...] = ()) -> list[Figure]:
     from flexlift.output.plots import ascent
     from flexlift.output.plots._style import draw
-    from flexlift.output.results import save_netcdf, to_csv
+    from flexlift.output.results import add_to_netcdf, to_csv
+    from flexlift.plumbing.atomic import write_text
 
-    save_netcdf(result, out / "data" / f"simulate_{mode}.nc")
-    if primary:
-        save_netcdf(result, out / "results.nc")
+    add_to_netcdf(result, out / "results.nc")  # every mode of the run in one file
     to_csv(result, out / "tables", prefix=f"simulate_{mode}")
+    for t in tables:
+        write_text(out / "tables" / t.csv, t.to_csv())
     figs = []
     fd = out / "figures"
     window = ascent.window_text(result)
     figs.append(Figure(draw(fd / f"simulate_{mode}_bags.png", ascent.bag_histories, result),
-                       f"Height, ascent velocity, pitch angle, pitch rate and net gas flow of "
-                       f"every bag ({mode} control), {window}; above them the heights over "
-                       "the whole run. Time in seconds from the start of filling."))
+                       f"Height, ascent velocity, pitch angle, pitch rate and net gas flow by "
+                       f"lift point ({mode} control), {window}; above them the heights over "
+                       "the whole run. One line per lift point (the mean of its bags, their "
+                       "spread as a band), coloured by its position along the hull. Time in "
+                       "seconds from the start of filling."))
     figs.append(Figure(draw(fd / f"simulate_{mode}_hull.png", ascent.hull_motion, result),
                        f"Hull heave and pitch ({mode} control), {window}."))
     if "x" in result.dataset.coords:
@@ -93,10 +97,9 @@ def stress_table(result, scenario, mode: str) -> Table:
 
 
 def run_stage(scenario, out: Path | None, control: str | None = None,
-              duration: float | None = None, progress=None, engine="table",
-              primary: bool | None = None) -> StageOutput:
-    """Simulate one control mode; write netCDF (``data/simulate_<mode>.nc``, and
-    ``results.nc`` for the scenario's own control mode or when ``primary``), CSV tables and
+              duration: float | None = None, progress=None, engine="table") -> StageOutput:
+    """Simulate one control mode; add it to ``results.nc`` (every mode simulated into ``out``
+    is one file, :func:`flexlift.output.results.save_netcdf`) and write its CSV tables and
     figures under ``out`` when given. A numerics failure still writes the partial results and
     is reported in the summary and warnings."""
     from flexlift.ascent import simulate
@@ -110,17 +113,16 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
         warnings.append(str(exc))
         if result is None:
             raise
-    if primary is None:
-        primary = mode == scenario.control.mode
     long_ = scenario.pipe is not None or scenario.control.sequence is not None
-    figures = (_write(result, Path(out), mode, primary,
-                      static_view(scenario) if long_ else None)
+    per_point, per_bag = point_tables(result, mode)
+    figures = (_write(result, Path(out), mode, static_view(scenario) if long_ else None,
+                      (per_point, per_bag))
                if out is not None else [])
     summary = result.summary()
     warnings += result.warnings
-    rows = [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")] for e in result.events]
-    tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"], rows),
-              gas_table(summary, mode)]
+    tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"],
+                    event_rows(result)),
+              gas_table(summary, mode), per_point, per_bag]
     if summary["max_stress_MPa"] is not None:
         tables.append(stress_table(result, scenario, mode))
     return StageOutput(name=f"simulate:{mode}", summary=summary, figures=figures, tables=tables,
@@ -146,7 +148,7 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
                    "all criteria"], rows)
     figures = []
     if out is not None:
-        results = [load_netcdf(Path(out) / "data" / f"simulate_{m}.nc") for m in modes]
+        results = [load_netcdf(Path(out) / "results.nc", m) for m in modes]
         path = draw(Path(out) / "figures" / "simulate_compare.png", ascent.compare, results)
         figures.append(Figure(path, f"Control modes compared: {', '.join(modes)}; time in "
                                     "seconds, from 60 s before the first separation."))

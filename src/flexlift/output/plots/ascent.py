@@ -58,33 +58,43 @@ def _event_lines(ax, result, kinds=("separation", "breakout")):
             ax.axvline(e["time_s"], color="0.45", lw=0.7, ls=":")
 
 
-def _bag_styles(ds):
-    return ["-" if k == "external" else "--" for k in ds.bag_kind.values]
-
-
 def bag_histories(result):
-    """The paper's five time histories for every bag (height, ascent velocity, pitch angle,
-    pitch rate, net flow) over :func:`zoom_window`, under an overview of the heights over the
-    whole run with that window shaded."""
+    """The paper's five time histories (height, ascent velocity, pitch angle, pitch rate, net
+    flow) over :func:`zoom_window`, under an overview of the heights over the whole run with
+    that window shaded: one line per lift point (:mod:`flexlift.output.liftpoints`; the mean
+    of its bags, their spread as a band), coloured by the point's position along the hull
+    (colour bar in metres), dashed for an internal bag; the legend names the points when
+    there are at most :data:`~flexlift.output.plots.groups.MAX_LEGEND`, else the line styles."""
+    from flexlift.output.liftpoints import lift_points, point_stats
+    from flexlift.output.plots.groups import point_colours, point_legend
+
     ds = result.dataset
     t = ds.time.values
     t0, t1 = zoom_window(result)
     fig, axes = new_figure(6, 1, figsize=(8.0, 11.0), height_ratios=[0.7, 1, 1, 1, 1, 1],
-                           margins={"top": 0.45, "hgap": 0.5})
-    styles = _bag_styles(ds)
+                           margins={"top": 0.45, "hgap": 0.5, "right": 0.95})
+    points = lift_points(ds)
+    colours, mappable = point_colours(points, _hull_length(ds))
     over = axes[0]
-    for k, b in enumerate(ds.bag.values):
-        over.plot(t, ds.height.values[:, k], styles[k], lw=1.0, label=str(b))
+    w = _in(t, t0, t1)
+    for ax, (name, scale, _), part in zip(axes, (("height", 1.0, ""),) + _PANELS,
+                                          [slice(None)] + [w] * len(_PANELS)):
+        values = ds[name].values
+        for p, c in zip(points, colours):
+            mean, lo, hi = point_stats(values[part], p)
+            ls = "-" if p.kind == "external" else "--"
+            ax.plot(t[part], mean * scale, ls, color=c, lw=1.0, label=p.label)
+            if p.count > 1:
+                ax.fill_between(t[part], lo * scale, hi * scale, color=c, alpha=0.25, lw=0)
     over.axvspan(t0, t1, color="C0", alpha=0.07, lw=0)
     over.set_xlim(0.0, max(t1, 1e-9))
     over.set_ylabel("height [m]\n(whole run)")
     over.set_xlabel(_TIME, labelpad=1)
-    over.legend(ncols=4, loc="upper left", fontsize=7.5)
+    point_legend(over, points)
+    cax = over.inset_axes([1.015, 0.0, 0.018, 1.0])
+    fig.colorbar(mappable, cax=cax, label="lift point x [m]")
     _event_lines(over, result)
-    w = _in(t, t0, t1)
-    for ax, (name, scale, label) in zip(axes[1:], _PANELS):
-        for k in range(ds.bag.size):
-            ax.plot(t[w], ds[name].values[w, k] * scale, styles[k], lw=1.0)
+    for ax, (_, _, label) in zip(axes[1:], _PANELS):
         ax.set_ylabel(label)
         ax.set_xlim(t0, t1)
         _event_lines(ax, result)
@@ -93,8 +103,17 @@ def bag_histories(result):
     axes[-1].set_xlabel(_TIME)
     over.text(0.5 * (t0 + t1), 0.25, "shown below", transform=over.get_xaxis_transform(),
               ha="center", va="center", fontsize=8, color="C0")
-    over.set_title(f"Bag histories, {result.control} control (dotted: separation, breakout)")
+    over.set_title(f"Bag histories by lift point, {result.control} control "
+                   "(dotted: separation, breakout)")
     return fig
+
+
+def _hull_length(ds) -> float:
+    """The hull's length [m] as far as the result knows it (its strength grid, else the
+    farthest bag)."""
+    if "x" in ds.coords and ds.x.size:
+        return float(ds.x.values[-1])
+    return float(np.max(ds.bag_x.values)) if ds.bag.size else 1.0
 
 
 def hull_motion(result):
