@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import json
 import math
+import re
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -60,7 +61,7 @@ def _number(text: str):
             return kind(text)
         except ValueError:
             continue
-    return text
+    return text.replace("``", "")
 
 
 def checked(option: str, kind, also: str = ""):
@@ -167,3 +168,13 @@ def writing(out: Path | None, command: str) -> Iterator[Path | None]:
         return
     with output_folder(out, command) as tmp:
         yield tmp
+
+
+_ROLE = re.compile(r":[a-z]+:`~?([^`]+)`")
+
+
+def help_text(doc: str | None) -> str:
+    """A module docstring as terminal text for ``--help``: reST's ``code`` and :role:`name`
+    marks dropped (``flexlift run`` -> flexlift run)."""
+    text = _ROLE.sub(lambda m: m.group(1).rsplit(".", 1)[-1], doc or "")
+    return text.replace("``", "")

@@ -32,6 +32,7 @@ from flexlift.cli._common import (
     add_scenario_arg,
     checked,
     emit_json,
+    help_text,
     scenario_from,
     writing,
 )
@@ -57,7 +58,7 @@ def _eval_point(text: str) -> tuple[float, ...]:
 
 def add_parser(sub) -> None:
     p = sub.add_parser(NAME, help="the supervisory fuzzy controller: sets, rules, surface",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=help_text(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     add_scenario_arg(p)
     p.add_argument("--fis", type=Path, default=None,
                    help="a MATLAB .fis file to use instead of the built-in supervisory system")

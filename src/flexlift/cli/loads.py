@@ -14,6 +14,7 @@ from flexlift.cli._common import (
     add_out_arg,
     add_scenario_arg,
     emit_json,
+    help_text,
     scenario_from,
     writing,
 )
@@ -24,7 +25,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         NAME,
         help="lift plan and longitudinal strength: bag count, layout, shear force, bending moment",
-        description=__doc__,
+        description=help_text(__doc__),
     )
     add_scenario_arg(p)
     add_out_arg(p, "figures (figures/loads_*.png) and tables (tables/loads_*.csv)")

@@ -14,6 +14,7 @@ from flexlift.cli._common import (
     add_out_arg,
     add_scenario_arg,
     emit_json,
+    help_text,
     key_option,
     positive_int,
     scenario_from,
@@ -26,7 +27,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         NAME,
         help="natural frequencies, mode shapes and nodes of the free-free hull; convergence",
-        description=__doc__,
+        description=help_text(__doc__),
     )
     add_scenario_arg(p)
     p.add_argument("--elements", type=key_option("--elements", "hull.elements"), default=None,

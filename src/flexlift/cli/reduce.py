@@ -19,6 +19,7 @@ from flexlift.cli._common import (
     add_out_arg,
     add_scenario_arg,
     emit_json,
+    help_text,
     positive_int,
     scenario_from,
     writing,
@@ -35,7 +36,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         NAME,
         help="modal state space per bag, mode ranking by dc gain, model order reduction",
-        description=__doc__,
+        description=help_text(__doc__),
     )
     add_scenario_arg(p)
     p.add_argument("--bag", default=None, help="reduce only this bag (e.g. bag_2); default: "

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from flexlift._jit import cache_is_warm
-from flexlift.cli._common import add_scenario_arg, emit_json, scenario_from
+from flexlift.cli._common import add_scenario_arg, emit_json, help_text, scenario_from
 from flexlift.output import output_folder, write_json, write_text
 from flexlift.output.controllers import copy_controller_files
 from flexlift.output.report import render_report
@@ -43,7 +43,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "run",
         help="the whole analysis: modes, lift plan, reduction, fuzzy controller, ascent, report",
-        description=__doc__,
+        description=help_text(__doc__),
     )
     add_scenario_arg(p)
     p.add_argument(

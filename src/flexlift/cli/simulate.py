@@ -15,6 +15,7 @@ from flexlift.cli._common import (
     add_out_arg,
     add_scenario_arg,
     emit_json,
+    help_text,
     key_option,
     scenario_from,
     with_options,
@@ -25,7 +26,7 @@ from flexlift.stages.simulate import MODES, run_stage
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("simulate", help="simulate the controlled ascent", description=__doc__)
+    p = sub.add_parser("simulate", help="simulate the controlled ascent", description=help_text(__doc__))
     add_scenario_arg(p)
     p.add_argument("--control", choices=MODES, default=None,
                    help="control mode (default: the scenario's control.mode)")

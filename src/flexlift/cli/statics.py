@@ -18,6 +18,7 @@ from flexlift.cli._common import (
     add_out_arg,
     add_scenario_arg,
     emit_json,
+    help_text,
     scenario_from,
     writing,
 )
@@ -38,7 +39,7 @@ def _lift(text: str) -> tuple[str, float]:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("statics", help="static equilibrium on the seabed under given bag lifts",
-                       description=__doc__)
+                       description=help_text(__doc__))
     add_scenario_arg(p)
     p.add_argument("--lift", type=_lift, action="append", default=[], metavar="BAG=TONNES",
                    help="a bag's lift in tonnes (repeatable); default the plan's holding lift")

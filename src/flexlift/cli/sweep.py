@@ -19,7 +19,7 @@ import logging
 import sys
 from pathlib import Path
 
-from flexlift.cli._common import add_json_arg, checked, emit_json
+from flexlift.cli._common import add_json_arg, checked, emit_json, help_text
 from flexlift.errors import clean
 from flexlift.scenario.types import whole
 from flexlift.sweep.executors import WORKERS_PER_CORE, max_workers
@@ -27,7 +27,7 @@ from flexlift.sweep.executors import WORKERS_PER_CORE, max_workers
 
 def add_parser(sub) -> None:
     p = sub.add_parser("sweep", help="a grid or Monte Carlo of ascents: probability of a safe lift",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=help_text(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("spec", help="the SPEC file (YAML: base, control, set, grid or monte_carlo)")
     p.add_argument("--workers", type=checked("--workers", whole(1, max_workers()),
                                                     f" ({WORKERS_PER_CORE} per core)"), default=None,
