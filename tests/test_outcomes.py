@@ -54,8 +54,8 @@ def test_a_run_too_short_is_incomplete_with_the_time_it_needs(tanker_short, tank
     assert all(v for k, v in r.criteria.items() if k != "reached_target")
     why = r.reasons["reached_target"]
     assert why == o["cause"]
-    assert why.startswith("every limit held; ")
-    assert "bags still rising" in why and "the run ended at 3,000 s" in why
+    assert why.startswith("7 of the 7 bags still rising, the lowest (bag_1) at ")
+    assert "; every limit held, but the run ended at 3,000 s, about " in why
     assert "set simulation.duration_s to at least" in why and "or auto" in why
     # the estimate (the distance left at the planned 0.2 m/s and the 600 s hold) against the
     # same lift run to its end: within 5 % of the time it really took
@@ -98,6 +98,34 @@ def test_a_weak_pull_that_would_break_out_later_is_incomplete():
     t_sep = sc.seabed.breakout_time_s * (H / U - 1.0)
     assert f"separates in ~{t_sep:,.0f} s more" in o["cause"]
     assert o["needs_s"] == pytest.approx(t_sep + 300.0 / 0.2 + 0.2 / 0.002 + 600.0, rel=1e-3)
+
+
+def test_a_controller_that_hunts_about_the_target_is_not_achieved_with_its_swing():
+    """A 5 m3 volume deadband (the controllers act only beyond it) makes the tanker hunt about
+    the target in a limit cycle of about ±0.27 m: it arrives and can never hold ±0.2 m."""
+    sc = load_scenario("tanker").with_changes(**{"control.volume_deadband_m3": 5.0,
+                                                 "limits.arrival_tolerance_m": 0.2})
+    r = simulate(sc, control="coordinated")
+    o = r.outcome
+    assert o["kind"] == "not_achieved" and o["needs_s"] is None
+    assert all(v for k, v in r.criteria.items() if k != "reached_target")  # every limit held
+    why = r.reasons["reached_target"]
+    assert why == o["cause"]
+    assert why.startswith("every bag arrived (the last at ")
+    assert "they did not hold within ±0.2 m of the 300 m target for 600 s: oscillating ±" in why
+    amp = float(why.split("oscillating ±")[1].split(" m")[0])
+    period = float(why.split(", period ")[1].split(" s")[0])
+    # against the heights themselves: the swing of the last third and the spectrum's peak
+    ds = r.dataset
+    t, z = ds.time.values, ds.height.values
+    late = t >= t[-1] - (t[-1] - np.nanmax(ds.arrival_time.values)) * 2 / 3
+    zl = z[late] - z[late].mean(0)
+    widest = int(np.argmax(np.ptp(zl, 0)))
+    assert amp == pytest.approx(0.5 * np.ptp(zl[:, widest]), abs=0.01)
+    assert 0.2 < amp < 0.5
+    spec = np.abs(np.fft.rfft(zl[:, widest]))
+    f = np.fft.rfftfreq(zl.shape[0], d=float(t[1] - t[0]))
+    assert period == pytest.approx(1.0 / f[1 + np.argmax(spec[1:])], rel=0.2)
 
 
 # --------------------------------------------------------------------------- before the run

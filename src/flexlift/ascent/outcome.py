@@ -30,8 +30,8 @@ OUTCOMES = ("safe", "unsafe", "not_achieved", "incomplete")
 RISING_FRACTION = 0.05
 #: the stretch at the end of a run over which the motion is judged [s]
 WINDOW_S = 120.0
-#: an oscillation is decaying (converging) when its second half is at most this fraction of
-#: its first
+#: an oscillation is decaying (converging) when its last third (of the time since the last
+#: arrival) is at most this fraction of the third before
 DECAY = 0.7
 
 
@@ -70,10 +70,10 @@ def judge(run, ds, events: list[dict], crit: dict, reasons: dict, error) -> Outc
 
 
 # --------------------------------------------------------------------------- estimates
-def remaining_ascent_s(scenario, plant, z_from: float) -> float:
+def remaining_ascent_s(scenario, plant, z_from: float, from_rest: bool = True) -> float:
     """Time [s] to rise from ``z_from`` to the target [m] at the planned speed, slowed where
     the purge valves cannot keep up (:func:`flexlift.control.profile.speed_limit`), plus the
-    acceleration and deceleration."""
+    time lost decelerating, v / 2a, and accelerating (``from_rest``), another v / 2a."""
     from flexlift.control.profile import speed_limit
 
     c, a = scenario.control, plant.arrays
@@ -88,7 +88,7 @@ def remaining_ascent_s(scenario, plant, z_from: float) -> float:
     v = np.maximum(v, 1e-6)
     inv = 1.0 / v
     return float(np.sum(0.5 * (inv[1:] + inv[:-1]) * np.diff(z))
-                 + c.ascent_speed_m_s / c.ascent_acceleration_m_s2)
+                 + (1.0 if from_rest else 0.5) * c.ascent_speed_m_s / c.ascent_acceleration_m_s2)
 
 
 def longest_run_s(scenario) -> float:
@@ -108,8 +108,8 @@ def _set_duration(end: float, needs: float, scenario) -> str:
 
 def _incomplete(run, ds, what: str, needs: float) -> Outcome:
     end = float(ds.time.values[-1])
-    return Outcome("incomplete", f"every limit held; {what}: the run ended at {end:,.0f} s, "
-                   f"about {needs:,.0f} s too soon ({_set_duration(end, needs, run.scenario)})",
+    return Outcome("incomplete", f"{what}; every limit held, but the run ended at {end:,.0f} s,"
+                   f" about {needs:,.0f} s too soon ({_set_duration(end, needs, run.scenario)})",
                    round(needs, 1))
 
 
@@ -148,7 +148,8 @@ def _short_of_target(run, ds, behind: np.ndarray) -> Outcome:
     ref = ds.reference_height.values[-1, idx] if "reference_height" in ds else np.full(n, np.nan)
     plan_running = bool(np.any(np.isfinite(ref) & (ref < target - tol)))
     if rising or plan_running:
-        needs = remaining_ascent_s(sc, run.plant, float(z[-1, low])) + sc.simulation.hold_time_s
+        needs = (remaining_ascent_s(sc, run.plant, float(z[-1, low]), from_rest=not rising)
+                 + sc.simulation.hold_time_s)
         what = (f"{n} of the {N} bags still rising, the lowest ({names[low]}) at "
                 f"{z[-1, low]:.1f} m, {target - z[-1, low]:.1f} m below the {target:g} m target; "
                 f"that distance at the planned speed and the {sc.simulation.hold_time_s:.0f} s hold")
@@ -182,31 +183,37 @@ def _not_held(run, ds, att: np.ndarray) -> Outcome:
     w = t >= last
     tw, e = t[w], z[w][:, att] - target
     names = np.asarray([str(b) for b in ds.bag.values])[att]
-    half = tw >= 0.5 * (tw[0] + tw[-1]) if tw.size else tw.astype(bool)
+    # judged on the last two thirds of the time since the last arrival (the first holds the
+    # overshoot of the arrival itself)
+    third = (tw - tw[0]) / max(float(tw[-1] - tw[0]), 1e-9) if tw.size else tw
+    half = third >= 2.0 / 3.0
     held_since = f"held within ±{tol:g} m for {end - start:,.0f} s of the {hold:.0f} s"
-    if math.isfinite(start) and (tw.size <= 4 or start <= tw[half][0]):
+    if math.isfinite(start) and (tw.size <= 6 or start <= tw[half][0]):
         return _incomplete(run, ds, f"every bag arrived (the last at {last:,.0f} s) and "
                            + held_since, hold - (end - start))
-    if tw.size <= 4:
+    if tw.size <= 6:
         return _incomplete(run, ds, f"every bag arrived, the last at {last:,.0f} s, just before "
                            f"the end; the {hold:.0f} s hold", hold)
-    dev1 = float(np.abs(e[~half]).max()) if (~half).any() else math.inf
+    middle = (third >= 1.0 / 3.0) & ~half
+    dev1 = float(np.abs(e[middle]).max()) if middle.any() else math.inf
     dev2 = float(np.abs(e[half]).max())
     if dev2 <= DECAY * dev1:  # settling: extrapolate the decay
-        halves = math.log(tol / dev2) / math.log(dev2 / dev1) if dev2 > tol else 0.0
-        needs = max(halves, 0.0) * 0.5 * float(tw[-1] - tw[0]) + hold
+        span = float(tw[half][-1] - tw[half][0])
+        thirds = math.log(tol / dev2) / math.log(dev2 / dev1) if dev2 > tol else 0.0
+        needs = max(thirds, 0.0) * span + hold
         return _incomplete(run, ds, f"every bag arrived (the last at {last:,.0f} s) and is "
                            f"settling (within ±{dev2:.1f} m of the target in the last "
-                           f"{float(tw[-1] - tw[half][0]):,.0f} s, from ±{dev1:.1f} m before); "
-                           f"its decay to ±{tol:g} m and the {hold:.0f} s hold", needs)
-    swings = [_oscillation(tw[half], e[half][:, j]) for j in range(e.shape[1])]
+                           f"{span:,.0f} s, from ±{dev1:.1f} m before); its decay to ±{tol:g} m "
+                           f"and the {hold:.0f} s hold", needs)
+    later = third >= 1.0 / 3.0
+    swings = [_oscillation(tw[later], e[later][:, j]) for j in range(e.shape[1])]
     j = int(np.argmax([s[0] for s in swings]))
     amp, period = swings[j]
-    centre = float(e[half][:, j].mean())
+    centre = float(e[later][:, j].mean())
     about = f" about {target + centre:.1f} m" if abs(centre) > 0.25 * tol else ""
-    how = (f"oscillating ±{amp:.1f} m{about}, period {period:.0f} s" if period else
-           f"drifting up to {dev2:.1f} m from the target")
+    how = (f"oscillating ±{amp:.2g} m{about}, period {period:.0f} s" if period else
+           f"drifting up to {dev2:.2g} m from the target")
     return Outcome("not_achieved", (
         f"every bag arrived (the last at {last:,.0f} s); they did not hold within ±{tol:g} m "
         f"of the {target:g} m target for {hold:.0f} s: {how} ({names[j]} the widest, over the "
-        f"last {float(tw[-1] - tw[half][0]):,.0f} s of the run, not settling)"))
+        f"last {float(tw[-1] - tw[later][0]):,.0f} s of the run, not settling)"))

@@ -116,6 +116,7 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
                       static_view(scenario) if long_ else None)
                if out is not None else [])
     summary = result.summary()
+    summary["conclusion"] = _conclusion(mode, result.outcome)
     warnings += result.warnings
     rows = [[e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")] for e in result.events]
     tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"], rows),
@@ -124,6 +125,19 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
         tables.append(stress_table(result, scenario, mode))
     return StageOutput(name=f"simulate:{mode}", summary=summary, figures=figures, tables=tables,
                        warnings=warnings, criteria=result.criteria)
+
+
+#: the outcome of an ascent in the lead of its section
+OUTCOME_WORDS = {"safe": "safe", "unsafe": "unsafe", "not_achieved": "not achieved",
+                 "incomplete": "incomplete (not unsafe: the run ended first)"}
+
+
+def _conclusion(mode: str, outcome: dict) -> str:
+    """The section's first sentence: the outcome of the ascent and why."""
+    kind = outcome.get("kind")
+    if kind is None:
+        return ""
+    return f"Outcome ({mode} control): {OUTCOME_WORDS.get(kind, kind)}: {outcome.get('cause', '')}."
 
 
 def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
@@ -136,13 +150,14 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
     rows = [[m, o.summary["max_pitch_deg"], o.summary["max_ascent_velocity_ms"],
              o.summary["max_descent_velocity_ms"], o.summary["arrival_spread_s"],
              o.summary["max_bending_moment_MNm"], o.summary["max_utilisation"],
-             o.summary["gas_total_free_air_m3"], all(o.criteria.values())]
+             o.summary["gas_total_free_air_m3"], all(o.criteria.values()),
+             OUTCOME_WORDS.get(o.summary.get("outcome"), "–").split(" (")[0]]
             for m, o in zip(modes, outputs)]
     table = Table("Control modes compared",
                   ["control", "max pitch [deg]", "max ascent velocity [m/s]",
                    "max descent velocity [m/s]", "arrival spread [s]", "max bending moment [MN m]",
                    "max stress utilisation", "gas in all (initial fill + top-up), free air [m3]",
-                   "all criteria"], rows)
+                   "all criteria", "outcome"], rows)
     figures = []
     if out is not None:
         results = [load_netcdf(Path(out) / "data" / f"simulate_{m}.nc") for m in modes]
