@@ -24,9 +24,14 @@ QUICK = {"control.target_height_m": 40.0, "seabed.breakout_time_s": 100.0,
 
 @pytest.fixture(scope="module")
 def tanker_auto():
-    """The tanker run until it holds the target (duration auto): the reference end."""
+    """The tanker run until it holds the target (duration auto): the reference end. Its
+    record first holds 500 s and grows as the run goes on."""
+    import flexlift.ascent.loop as loop
+
     sc = load_scenario("tanker").with_changes(**{"simulation.duration_s": "auto"})
-    return simulate(sc, control="coordinated")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(loop, "AUTO_FIRST_S", 500.0)
+        return simulate(sc, control="coordinated")
 
 
 @pytest.fixture(scope="module")
@@ -35,15 +40,22 @@ def tanker_short():
     return simulate(load_scenario("tanker"), control="coordinated", duration=3000.0)
 
 
-def test_auto_runs_until_the_target_is_held_and_is_safe(tanker_auto):
+def test_auto_runs_until_the_target_is_held_and_is_safe(tanker_auto, tanker_short):
     r = tanker_auto
     held = r.event_time("target_held")
     assert held is not None and r.headline["end_time_s"] == pytest.approx(held, abs=0.2)
     assert held > 6000.0 or held == pytest.approx(4045.5, abs=1.0)  # the 6,000 s run's end
     assert r.outcome["kind"] == "safe" and r.outcome["needs_s"] is None
     assert all(r.criteria.values())
-    # the record grew from its first stretch only as far as the run went
+    # the record grew from its first 500 s as far as the run went, every row kept: the same
+    # rows as the 3,000 s run's where they overlap
     assert r.dataset.sizes["time"] == pytest.approx(held + 1, abs=2)
+    a, b = r.dataset, tanker_short.dataset
+    np.testing.assert_array_equal(a.time.values[:3001], b.time.values)
+    np.testing.assert_allclose(a.height.values[:3001], b.height.values, rtol=0, atol=1e-9)
+    n = b.sizes["time_strength"]
+    np.testing.assert_allclose(a.bending_moment.values[:n], b.bending_moment.values, rtol=0,
+                               atol=1e-3)
 
 
 def test_a_run_too_short_is_incomplete_with_the_time_it_needs(tanker_short, tanker_auto):
