@@ -82,3 +82,19 @@ def test_an_incomplete_run_is_not_called_unsafe_in_the_verdict(peaks):
     v = _verdict(render_report(sc, [peaks, stage]))
     assert v.startswith("partial: Incomplete")
     assert "surface_interpolation_error_below_0.01 failed: the supervisor" in v
+
+
+def test_the_cli_says_the_outcome_and_how_much_longer(capsys):
+    import json
+
+    from flexlift.cli import main
+
+    assert main(["simulate", "--control", "coordinated", "--duration", "200"]) == 0
+    text = capsys.readouterr().out
+    assert "\noutcome: incomplete\n" in text
+    assert "  reached_target: never separated in the 200 s run: " in text
+    assert "every limit held, but the run ended at 200 s, about " in text
+    assert main(["simulate", "--control", "coordinated", "--duration", "200", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["outcome"] == "incomplete" and out["needs_more_s"] > 3000.0
+    assert out["outcome_cause"] == out["reasons"]["reached_target"]
