@@ -140,6 +140,24 @@ def test_a_controller_that_hunts_about_the_target_is_not_achieved_with_its_swing
     assert period == pytest.approx(1.0 / f[1 + np.argmax(spec[1:])], rel=0.2)
 
 
+def test_a_broken_limit_is_unsafe_and_the_target_reason_says_what_did_not_hold():
+    """A supervisor ten times as stiff on the height error (error scale 0.5 m) overshoots:
+    the limits break, and the bags arrive but cannot hold; the reason no longer says "only 7
+    of the bags arrived" when every one did."""
+    sc = load_scenario("tanker").with_changes(**{**QUICK, "simulation.hold_time_s": 300.0,
+                                                 "control.supervisor.error_scale_m": 0.5})
+    r = simulate(sc, control="coordinated")
+    o = r.outcome
+    assert o["kind"] == "unsafe"
+    assert o["cause"].startswith("ascent velocity: ")
+    assert not r.criteria["ascent_velocity"] and not r.criteria["reached_target"]
+    assert np.isfinite(r.dataset.arrival_time.values).all()  # every bag arrived
+    why = r.reasons["reached_target"]
+    assert why.startswith("separated at 499 s; every bag arrived within ±1 m of the target, "
+                          "but they did not hold there for 300 s by the end of the 1,500 s run")
+    assert "only" not in why
+
+
 # --------------------------------------------------------------------------- before the run
 def test_the_duration_check_warns_before_a_run_too_short(tanker_auto):
     tanker = load_scenario("tanker")
