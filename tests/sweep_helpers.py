@@ -38,3 +38,26 @@ class Substitute:
 
     def close(self, cancel: bool = False):
         self.engine.close(cancel)
+
+
+def bug_in_case(task):
+    """A worker in which case DIE_CASE meets a programming error (a ZeroDivisionError where
+    its plant is built), in whatever process or thread runs it; the other cases run as usual."""
+    import threading
+
+    import flexlift.sweep.plants as plants
+
+    if task.index != DIE_CASE:
+        return run_case(task)
+    real, me = plants.plant_for, threading.get_ident()
+
+    def broken(*args, **kwargs):
+        if threading.get_ident() == me:
+            return 1 / 0
+        return real(*args, **kwargs)
+
+    plants.plant_for = broken
+    try:
+        return run_case(task)
+    finally:
+        plants.plant_for = real

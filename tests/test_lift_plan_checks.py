@@ -74,6 +74,7 @@ def test_checks_are_quiet_on_the_tanker(tanker):
     ("breakout", {"control.breakout_pull_t": 40.0}),
     ("purge_capacity", {"environment.water_depth_m": 40.0, "control.target_height_m": 20.0}),
     ("fill", {"gas.fill_rate_max_m3_s": 0.001}),
+    ("duration", {"simulation.duration_s": 3000.0}),
 ])
 def test_each_check_fires_on_a_case_built_to_trip_it(tanker, name, changes):
     sc = tanker.with_changes(**changes)
@@ -81,8 +82,10 @@ def test_each_check_fires_on_a_case_built_to_trip_it(tanker, name, changes):
     assert not checks[name].ok
     assert any(ch.isdigit() for ch in checks[name].message)  # says it with numbers
     others = [c.name for c in checks.values() if not c.ok and c.name != name]
-    # a slow fill also delays the breakout (the pull is filled first): both may fire
-    assert others == [] or (name, others) == ("fill", ["breakout"]), others
+    # a slow fill also delays the breakout (the pull is filled first), and a late breakout
+    # leaves the run too short for the ascent and the hold: those may fire with it
+    also = {"fill": {"breakout", "duration"}, "breakout": {"duration"}}.get(name, set())
+    assert set(others) <= also, others
 
 
 @pytest.mark.parametrize("changes, field", [

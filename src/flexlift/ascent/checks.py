@@ -11,12 +11,16 @@ calls it. The others are warnings, shown by ``flexlift loads`` and in the report
 - purge capacity: from which height up the planned speed cannot be held by purging (the
   planned ascent slows there, :mod:`flexlift.control.profile`);
 - fill: the time the supply takes to fill the breakout pull;
+- duration: the separation, the ascent at the planned (valve-limited) speed and the hold
+  against ``simulation.duration_s`` (a run too short ends *incomplete*);
 - hull girder stress under the plan: sigma = M / Z against the allowable stress;
 - a staged lift: whether the structure is flexible enough to peel off in its stages.
 """
 
 from __future__ import annotations
 
+import logging
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +33,8 @@ from flexlift.control.sequence import start_times
 from flexlift.errors import InputError
 from flexlift.loads.statics import suspended_length
 from flexlift.physics import seabed
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -75,7 +81,8 @@ def refuse_unworkable(scenario, plant) -> None:
 def plan_checks(scenario, plant) -> list[Check]:
     """Every warning-level check of ``plant``'s lift plan (module docstring)."""
     checks = [balance_check(plant), breakout_check(scenario, plant),
-              purge_check(scenario, plant), fill_check(scenario, plant)]
+              purge_check(scenario, plant), fill_check(scenario, plant),
+              duration_check(scenario, plant)]
     if scenario.control.sequence is not None:
         checks.append(sequence_check(scenario, plant))
     return checks
@@ -130,6 +137,63 @@ def balance_check(plant) -> Check:
     return Check("balance", ok, msg)
 
 
+def _separations(scenario, plant):
+    """The breakout pull of each external bag and what the fill holds of it [m^3], and each
+    stage's separation time and fill time [s] (SPEC §6: the bags of a stage fill at once)."""
+    a = plant.arrays
+    ext = np.flatnonzero(plant.external)
+    V_pull = bag_pulls(scenario, plant)
+    held = np.maximum(V_pull - scenario.control.volume_deadband_m3, 0.0)
+    start = start_times(scenario, plant.names, plant.x_point, plant.external)[ext]
+    q_in, T_b = scenario.gas.fill_rate_max_m3_s, scenario.seabed.breakout_time_s
+    times, fills = [], []
+    for k in range(a.ng):
+        mine = a.bag_group[ext] == k
+        fill = float(held[mine].sum()) / max(mine.sum() * q_in, 1e-12)
+        fills.append(fill)
+        times.append(float(start[mine].max(initial=0.0)) + fill + seabed.separation_time(
+            float(held[mine].sum()) * a.rho_g, float(a.H0[k]), T_b))
+    return V_pull, held, times, fills
+
+
+def duration_check(scenario, plant) -> Check:
+    """Whether the run is long enough for the plan: the last separation (the breakout check's
+    estimate), the ascent to the target at the planned speed where the purge valves keep up
+    and at their limit where not, and the hold (``simulation.hold_time_s``)."""
+    from flexlift.ascent.outcome import remaining_ascent_s
+
+    sim = scenario.simulation
+    t_sep = max(_separations(scenario, plant)[2]) if float(plant.arrays.H0.sum()) > 0 else 0.0
+    rise = remaining_ascent_s(scenario, plant, 0.0)
+    need = t_sep + rise + sim.hold_time_s
+    if not math.isfinite(need):
+        return Check("duration", False, "the pull never separates the hull (the breakout check "
+                     "says why), so no run is long enough: the plan cannot finish")
+    how = (f"the plan needs ~{need:,.0f} s: separation at ~{t_sep:,.0f} s, {rise:,.0f} s rising "
+           f"{scenario.control.target_height_m:g} m at the planned "
+           f"{scenario.control.ascent_speed_m_s:g} m/s (slower where the purge valves cannot keep "
+           f"up) and the {sim.hold_time_s:.0f} s hold")
+    if sim.duration_s == "auto":
+        ok = bool(need < sim.longest_run_s)
+        return Check("duration", ok, f"{how}; duration auto: the run stops once the target is "
+                     f"held, at most after {sim.longest_run_s:,.0f} s"
+                     + ("" if ok else " (too short: lengthen simulation.time_step_s or "
+                        "output_interval_s, which set that limit)"))
+    ok = bool(need <= sim.duration_s)
+    msg = f"{how}, {'within' if ok else 'longer than'} the {sim.duration_s:,.0f} s run"
+    if not ok:
+        msg += (f": the run would end incomplete; set simulation.duration_s to at least "
+                f"{math.ceil(need * 1.1 / 100) * 100:,.0f} s, or auto")
+    return Check("duration", ok, msg)
+
+
+def warn_short(scenario, plant) -> None:
+    """Log the :func:`duration_check` warning when the run is too short for the plan."""
+    check = duration_check(scenario, plant)
+    if not check.ok:
+        log.warning("simulation.duration_s: %s", check.message)
+
+
 def breakout_check(scenario, plant) -> Check:
     """Whether the pull breaks the suction within the run (SPEC §6 and the fill). The fill
     stops within the volume deadband of its target, so each bag holds its pull less the
@@ -139,20 +203,10 @@ def breakout_check(scenario, plant) -> Check:
     H0 = float(a.H0.sum())
     if H0 <= 0:
         return Check("breakout", True, "no suction (breakout factor 1): the hull lifts as soon as it is light")
-    ext = np.flatnonzero(plant.external)
-    V_pull = bag_pulls(scenario, plant)
-    held = np.maximum(V_pull - scenario.control.volume_deadband_m3, 0.0)
-    start = start_times(scenario, plant.names, plant.x_point, plant.external)[ext]
-    q_in, T_b = scenario.gas.fill_rate_max_m3_s, scenario.seabed.breakout_time_s
-    times, fills = [], []
-    for k in range(a.ng):
-        mine = a.bag_group[ext] == k
-        fill = float(held[mine].sum()) / max(mine.sum() * q_in, 1e-12)  # the bags fill at once
-        fills.append(fill)
-        times.append(float(start[mine].max(initial=0.0)) + fill + seabed.separation_time(
-            float(held[mine].sum()) * a.rho_g, float(a.H0[k]), T_b))
+    V_pull, held, times, fills = _separations(scenario, plant)
+    T_b = scenario.seabed.breakout_time_s
     last = int(np.argmax(times))
-    duration = scenario.simulation.duration_s
+    duration = scenario.simulation.run_length_s
     ok = bool(times[last] < 0.8 * duration)
     pull = float(V_pull.sum()) * a.rho_g
     lost = pull - float(held.sum()) * a.rho_g
@@ -212,7 +266,7 @@ def fill_check(scenario, plant) -> Check:
     t_fill = pull / max(n_ext * scenario.gas.fill_rate_max_m3_s, 1e-12)
     V_n = plant.neutral_volume[plant.external]
     t_first = float(V_n.max()) / scenario.gas.fill_rate_max_m3_s
-    ok = t_fill < 0.1 * scenario.simulation.duration_s
+    ok = t_fill < 0.1 * scenario.simulation.run_length_s
     msg = (f"the supply ({scenario.gas.fill_rate_max_m3_s:g} m3/s per bag) fills the "
            f"{pull:.0f} m3 pull in {t_fill:.0f} s; the initial fill to the neutral volume took "
            f"{t_first / 60:.0f} min per bag")

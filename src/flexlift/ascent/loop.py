@@ -4,7 +4,8 @@ The compiled loop (:mod:`flexlift.ascent.kernel`) runs in chunks; between chunks
 applies the faults due, draws the next chunk of noise, evaluates an external supervisor when
 one is used, and reports progress. The run stops when every bag point has held within
 ``limits.arrival_tolerance_m`` of the target for ``simulation.hold_time_s``, when a bag
-breaches the surface (the model ends there), at ``simulation.duration_s``, or with
+breaches the surface (the model ends there), at ``simulation.duration_s`` (``auto``: the
+longest run the scenario's limits allow, the record grown as it goes), or with
 :class:`~flexlift.errors.SimulationError` (its ``partial`` the result so far) when the
 numerics fail.
 """
@@ -16,7 +17,7 @@ import math
 import numpy as np
 
 from flexlift.ascent import kernel
-from flexlift.ascent.checks import refuse_unworkable
+from flexlift.ascent.checks import refuse_unworkable, warn_short
 from flexlift.ascent.faults import apply_fault, check_faults, fault_step
 from flexlift.ascent.noise import ForceNoise, MeasurementNoise
 from flexlift.ascent.paper import paper_plant
@@ -37,6 +38,8 @@ from flexlift.errors import InputError, SimulationError
 MODES = ("decentralized", "coordinated", "paper", "open-loop")
 #: steps per call of the compiled loop (progress, faults and noise between calls)
 CHUNK_STEPS = 2000
+#: simulation.duration_s: auto: the record first holds this much of the run [s]
+AUTO_FIRST_S = 10_000.0
 
 
 def simulate(scenario, control: str | None = None, duration: float | None = None,
@@ -83,7 +86,7 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     mode = control or scenario.control.mode
     if mode not in MODES:
         raise InputError("control", mode, f"use {', '.join(MODES)}")
-    T_end = float(scenario.simulation.duration_s if duration is None else duration)
+    T_end = float(scenario.simulation.run_length_s if duration is None else duration)
     if not math.isfinite(T_end) or T_end <= 0:
         raise InputError("duration", duration, "must be a positive time [s]")
     if plant is None:
@@ -91,6 +94,8 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     check_faults(scenario, plant.names)
     check_neutral(plant)
     refuse_unworkable(scenario, plant)
+    if duration is None:
+        warn_short(scenario, plant)
     return Ascent(scenario, plant, mode, T_end, engine).run(progress)
 
 
@@ -117,7 +122,10 @@ class Ascent:
         self.R = new_run_state(a.nr, a.nb, a.ns, a.ng)
         self.W = new_switches(a.nb, a.ns)
         self.W.current[0] = scenario.disturbance.current_m_s
-        self.rec = new_record(self.X.n_steps, self.X.k_out, self.X.k_str, a.nb, a.nr, a.ng, a.ns)
+        # simulation.duration_s: auto: buffers for a first stretch, grown as the run goes on
+        first = self.X.n_steps if sim.duration_s != "auto" else min(
+            self.X.n_steps, int(AUTO_FIRST_S / dt))
+        self.rec = new_record(first, self.X.k_out, self.X.k_str, a.nb, a.nr, a.ng, a.ns)
         self.force_noise = ForceNoise(scenario, dt, plant.strip_element, plant.hull.n_elements)
         self.meas_noise = MeasurementNoise(scenario, a.nb)
         self.faults = sorted(scenario.faults, key=lambda f: f.time_s)
@@ -144,6 +152,7 @@ class Ascent:
             if fi < len(self.faults):
                 k_stop = min(k_stop, max(fault_step(self.faults[fi], X.dt), k + 1))
             self._noise(k, k_stop)
+            self._room(k_stop)
             code = self._advance(k_stop)
             if progress is not None:
                 progress(min(R.counters[0] / max(X.n_steps, 1), 1.0))
@@ -173,6 +182,18 @@ class Ascent:
             S = self.S
             u = np.asarray(self.external(np.column_stack([S.e_in, S.r_in])), dtype=float)
             S.u[:] = np.where(np.isnan(S.t_sep), 0.0, u.reshape(-1))
+
+    def _room(self, k_stop: int) -> None:
+        """Grow the record (doubling) so that it holds the rows and snapshots to ``k_stop``."""
+        X, rec = self.X, self.rec
+        if (k_stop // X.k_out + 2 <= rec.t.size and k_stop // X.k_str + 2 <= rec.snap_t.size):
+            return
+        a = self.A
+        steps = min(max(2 * (rec.t.size - 2) * X.k_out, k_stop), X.n_steps)
+        new = new_record(steps, X.k_out, X.k_str, a.nb, a.nr, a.ng, a.ns)
+        for old, big in zip(rec, new):
+            big[: old.shape[0]] = old
+        self.rec = new
 
     def _fault(self, fault, t: float) -> None:
         detail = apply_fault(fault, t, list(self.plant.names), self.W, self.C.bags, self.S)

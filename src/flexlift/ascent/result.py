@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from flexlift import constants as C
+from flexlift.ascent.outcome import judge
 from flexlift.ascent.state import (
     EV_ARRIVAL,
     EV_BREAKOUT,
@@ -95,6 +96,13 @@ class Result:
         return json.loads(self.dataset.attrs.get("warnings", "[]"))
 
     @property
+    def outcome(self) -> dict:
+        """What happened (:mod:`flexlift.ascent.outcome`): ``kind`` (safe, unsafe,
+        not_achieved or incomplete), ``cause`` (one sentence) and ``needs_s`` (incomplete:
+        about how much longer the run must go on [s])."""
+        return json.loads(self.dataset.attrs.get("outcome", "{}"))
+
+    @property
     def error(self) -> str:
         return self.dataset.attrs.get("error", "")
 
@@ -116,7 +124,10 @@ class Result:
                 "gas_used_local_m3", "gas_used_free_air_m3",
                 "gas_initial_free_air_m3", "gas_total_free_air_m3", "gas_vented_free_air_m3",
                 "gas_purged_free_air_m3", "supply_bag_hours", "end_time_s")
-        out = {"control": self.control, **{k: h[k] for k in keys}, "arrival_time_s": arr,
+        out = {"control": self.control, "outcome": self.outcome.get("kind"),
+               "outcome_cause": self.outcome.get("cause"),
+               "needs_more_s": self.outcome.get("needs_s"),
+               **{k: h[k] for k in keys}, "arrival_time_s": arr,
                "final_height_m": {str(b): round(float(v), 2)
                                   for b, v in zip(ds.bag.values, ds.height.values[-1])},
                "criteria": self.criteria, "reasons": self.reasons, "warnings": self.warnings,
@@ -310,10 +321,14 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
     reasons = explain(run, events, crit, vmax, vdown, pmax, error)
     if not crit["bending_utilisation"]:
         reasons["bending_utilisation"] = utilisation_reason(ds, sc)
+    outcome = judge(run, ds, events, crit, reasons, error)
+    if outcome.kind in ("incomplete", "not_achieved"):
+        reasons["reached_target"] = outcome.cause
     warnings = slope_warnings(ds, sc.limits.slope_validity_deg)
     ds.attrs.update(warnings=json.dumps(warnings),title=f"flexlift ascent of {sc.name}, {run.mode} control", scenario=sc.name,
                     scenario_checksum=sc.checksum(), control=run.mode, events=json.dumps(events),
-                    criteria=json.dumps(crit), reasons=json.dumps(reasons), headline=json.dumps(headline), error=error or "",
+                    criteria=json.dumps(crit), reasons=json.dumps(reasons),
+                    outcome=json.dumps(outcome.as_dict()), headline=json.dumps(headline), error=error or "",
                     max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax)
 
 
@@ -423,13 +438,15 @@ def explain(run, events, crit, vmax: float, vdown: float, pmax: float, error) ->
         elif first("separation") is None:
             out["reached_target"] = ("never separated in the "
                                      f"{end:,.0f} s run: {breakout_check(sc, run.plant).message}")
-        else:
-            arrived = [e for e in events if e["kind"] == "arrival"]
+        else:  # (a run that kept every limit has its outcome's cause here instead)
+            att = np.asarray(run.W.attached) > 0
+            n, N = int(np.count_nonzero(np.isfinite(run.R.arrival) & att)), int(att.sum())
+            tol = f"±{lim.arrival_tolerance_m:g} m of the target"
             out["reached_target"] = (
-                f"separated at {first('separation')['time_s']:.0f} s but "
-                + (f"only {len(arrived)} of the bags arrived within tolerance" if arrived else
-                   "no bag arrived within tolerance of the target")
-                + f" by the end of the {end:,.0f} s run"
-                + ("" if not arrived else
-                   f"; the target was not held for {run.X.hold_time:.0f} s"))
+                f"separated at {first('separation')['time_s']:.0f} s; "
+                + (f"every bag arrived within {tol}, but they did not hold there for "
+                   f"{run.X.hold_time:.0f} s" if n == N and N else
+                   f"{n} of the {N} bags arrived within {tol}, the others did not" if n else
+                   f"no bag arrived within {tol}")
+                + f" by the end of the {end:,.0f} s run")
     return out

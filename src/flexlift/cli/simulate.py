@@ -58,7 +58,7 @@ def _main(args: argparse.Namespace) -> int:
             f"max descent velocity {s['max_descent_velocity_ms']} m/s, "
             f"max bending moment {s['max_bending_moment_MNm']} MN m, gas {s['gas_total_free_air_m3']} m3 "
             f"free air in all ({s['gas_initial_free_air_m3']} initial fill + {s['gas_used_free_air_m3']} "
-            f"top-up)\ncriteria: {crit}\n")
+            f"top-up)\ncriteria: {crit}\noutcome: {(s.get('outcome') or '-').replace('_', ' ')}\n")
         for k, why in s["reasons"].items():
             sys.stdout.write(f"  {k}: {why}\n")
     for w in out.warnings:

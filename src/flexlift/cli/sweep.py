@@ -7,8 +7,10 @@ It ends with ``results.nc`` (a ``case`` dimension, the varied keys as coordinate
 ``summary.json`` and ``report.html``.
 
 Exit codes: 0 the sweep ran (criteria failing are results, not errors); 1 every case failed
-(the most common failure is printed), or the Dask scheduler was lost during the sweep (the
-finished cases are kept; the command to finish it is printed); 2 bad input (an unknown key, a bad distribution, an
+(the most common failure is printed), a case raised a programming error (its traceback is
+printed), or the Dask scheduler was lost during the sweep (in both, the finished cases are
+kept and the command to finish the sweep is printed); 2 bad input (an unknown key, a bad
+distribution, an
 unreachable scheduler, ...); 130 interrupted (the finished cases are kept).
 """
 
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import shlex
 import sys
 from pathlib import Path
 
@@ -78,7 +81,7 @@ def _main(args: argparse.Namespace) -> int:
     from flexlift.cli import Terminated
     from flexlift.sweep import load_spec, run_sweep
     from flexlift.sweep.executors import SchedulerLost, make_engine
-    from flexlift.sweep.worker import OutsideCases
+    from flexlift.sweep.worker import CaseError, OutsideCases
 
     spec = load_spec(args.spec, yes=args.yes)
     out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{Path(args.spec).stem}"
@@ -95,6 +98,13 @@ def _main(args: argparse.Namespace) -> int:
         h.addFilter(quiet_cases)
     try:
         result = run_sweep(spec, out, engine=engine, progress=bar)
+    except CaseError as exc:  # a bug, not a result: its traceback, and how to go on
+        bar.close()
+        sys.stderr.write(f"flexlift sweep: traceback of case {exc.case}:\n{exc.trace}")
+        sys.stderr.write(f"flexlift sweep: {exc}; the finished cases are kept in {out}: fix "
+                         f"the cause (or report it) and run {_rerun(args, out)} to finish the "
+                         "sweep\n")
+        return 1
     except (KeyboardInterrupt, Terminated) as exc:
         bar.close()
         how = "terminated" if isinstance(exc, Terminated) else "interrupted"
@@ -142,7 +152,6 @@ def _check_cost(spec, workers: int, args) -> None:
 
 def _rerun(args: argparse.Namespace, out: Path) -> str:
     """The command that resumes this sweep (same SPEC, same folder, same engine)."""
-    import shlex
 
     cmd = ["flexlift", "sweep", str(args.spec), "--out", str(out)]
     if args.scheduler is not None:
@@ -161,7 +170,12 @@ def _print_summary(s: dict, out: Path) -> None:
     for mode, fp in s["by_control"].items():
         w = fp["all_criteria"]
         if w["n"]:
-            lines.append(f"{mode}: probability of failing any criterion {w['p']:.3g} "
-                         f"(95 % {w['low']:.3g}-{w['high']:.3g}, {w['failed']} of {w['n']})")
+            o = s["outcomes_by_control"][mode]
+            lines.append(f"{mode}: probability of failure (unsafe, not achieved or failed to "
+                         f"run) {w['p']:.3g} (95 % {w['low']:.3g}-{w['high']:.3g}, "
+                         f"{w['failed']} of {w['n']}: {o['unsafe']['failed']} unsafe, "
+                         f"{o['not_achieved']['failed']} not achieved, {o['failed']['failed']} "
+                         f"failed to run); {o['incomplete']['failed']} incomplete (the run "
+                         "ended first: not a failure)")
     lines.append(f"report: {out / 'report.html'}")
     sys.stdout.write("\n".join(lines) + "\n")

@@ -13,6 +13,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from flexlift import __version__
+from flexlift.output.checktext import explain_check
 from flexlift.output.stage import StageOutput
 
 STAGE_TITLES = {
@@ -43,6 +44,7 @@ figcaption { font-size: .85rem; color: #4a5568; }
 .verdict { font-size: 1.1rem; padding: .6rem .9rem; border-radius: 4px; margin: 1rem 0; }
 .verdict.ok { background: #e7f5ec; border: 1px solid #17703a; }
 .verdict.bad { background: #fdecea; border: 1px solid #b42318; }
+.verdict.partial { background: #fff7e0; border: 1px solid #d69e2e; }
 .warn { background: #fff7e0; border-left: 4px solid #d69e2e; padding: .4rem .8rem; margin: .5rem 0; }
 .meta { font-size: .85rem; color: #4a5568; }
 nav ul { columns: 2; font-size: .9rem; list-style: none; padding-left: 0; }
@@ -179,23 +181,56 @@ def _particulars(scenario) -> str:
     return f"<table><tbody>{body}</tbody></table>"
 
 
-def _verdict(lift: dict, checks: dict, warnings: list, reasons: dict | None = None) -> str:
-    """The verdict box: the lift criteria decide; the numerical checks and warnings count;
-    each failed lift criterion with its cause (``reasons``: "mode: criterion" -> sentence)."""
-    failed = [k for k, v in {**lift, **checks}.items() if not v]
+#: the verdict's heading and colour per outcome of the ascent (flexlift.ascent.outcome)
+_OUTCOME_HEAD = {"unsafe": ("bad", "Unsafe"), "not_achieved": ("bad", "Not achieved"),
+                 "incomplete": ("partial", "Incomplete"), "safe": ("ok", "Safe")}
+
+
+def _verdict(lift: dict, checks: dict, warnings: list, reasons: dict | None = None,
+             outcomes: dict | None = None, check_reasons: dict | None = None) -> str:
+    """The verdict box: the ascent's outcome in each control mode decides (``outcomes``:
+    mode -> {kind, cause, needs_s}); the numerical checks and warnings count, each failed one
+    with what it means (``check_reasons``: "stage: criterion" -> sentence); each failed lift
+    criterion with its cause (``reasons``: "mode: criterion" -> sentence)."""
     if not lift:
         return ('<div class="verdict bad">The ascent was not simulated, so the lift criteria '
                 "were not evaluated.</div>")
+    outcomes = outcomes or {}
+    failed = [k for k, v in {**lift, **checks}.items() if not v]
+    bad_checks = [k for k, v in checks.items() if not v]
     if not failed and not warnings:
         return ('<div class="verdict ok"><b>Lift plan acceptable:</b> every lift criterion passed '
                 "in every control mode simulated, every numerical check passed, no warnings.</div>")
-    text = f"{len(failed)} criterion(s) failed: {', '.join(failed)}" if failed else (
-        "all criteria passed")
+    kinds = [o.get("kind") for o in outcomes.values()]
+    worst = next((k for k in ("unsafe", "not_achieved", "incomplete") if k in kinds), None)
+    items = [f"<li><b>{_e(m)} control: {_e(_OUTCOME_HEAD[o['kind']][1].lower())}</b> — "
+             f"{_e(o.get('cause', ''))}</li>" for m, o in outcomes.items()
+             if o.get("kind") in ("unsafe", "not_achieved", "incomplete")]
+    shown = {f"{m}: reached_target" for m, o in outcomes.items()
+             if o.get("kind") in ("not_achieved", "incomplete")}
+    items += [f"<li><b>{_e(k)}</b>: {_e(r)}</li>" for k, r in (reasons or {}).items()
+              if k not in shown and not any(o.get("kind") == "unsafe" and k.startswith(f"{m}: ")
+                                            for m, o in outcomes.items())]
+    items += [f"<li><b>numerical check {_e(k)} failed</b>: "
+              f"{_e((check_reasons or {}).get(k, 'see its stage'))}</li>" for k in bad_checks]
+    cls, head = _OUTCOME_HEAD.get(worst, ("bad", "Review needed"))
+    if worst is None:
+        lead = "every lift criterion passed"
+        cls, head = ("bad", "Review needed") if bad_checks else ("partial", "Review the warnings")
+        if bad_checks:
+            lead += (f", but {len(bad_checks)} numerical check(s) of the analysis failed: its "
+                     "numbers cannot be signed until they pass")
+    elif worst == "incomplete":
+        lead = ("every limit held, but the run ended before the target was held: no lift was "
+                "unsafe; lengthen the run to know")
+    elif worst == "not_achieved":
+        lead = "every limit held, but the plan cannot finish"
+    else:
+        lead = f"{len(failed)} criterion(s) failed: {', '.join(failed)}"
     if warnings:
-        text += f"; {len(warnings)} warning(s)"
-    causes = "".join(f"<li><b>{_e(k)}</b>: {_e(r)}</li>" for k, r in (reasons or {}).items())
-    causes = f"<ul>{causes}</ul>" if causes else ""
-    return f'<div class="verdict bad"><b>Review needed:</b> {_e(text)}.{causes}</div>'
+        lead += f"; {len(warnings)} warning(s)"
+    causes = f"<ul>{''.join(items)}</ul>" if items else ""
+    return f'<div class="verdict {cls}"><b>{_e(head)}:</b> {_e(lead)}.{causes}</div>'
 
 
 def _stage_sections(stages: list[StageOutput]) -> list[str]:
@@ -247,6 +282,11 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
               if not s.name.startswith("simulate:") for k, v in s.criteria.items()}
     reasons = {f"{s.name.split(':', 1)[1]}: {k}": r for s in stages
                if s.name.startswith("simulate:") for k, r in s.summary.get("reasons", {}).items()}
+    outcomes = {s.name.split(":", 1)[1]: {"kind": s.summary.get("outcome"),
+                                          "cause": s.summary.get("outcome_cause")}
+                for s in stages if s.name.startswith("simulate:") and s.summary.get("outcome")}
+    check_reasons = {f"{s.name}: {k}": explain_check(s.name, k, s.summary) for s in stages
+                     if not s.name.startswith("simulate:") for k, v in s.criteria.items() if not v}
     warnings = [(s.name, w) for s in stages for w in s.warnings]
     headline = next((s.tables[0] for s in stages if s.name == "compare" and s.tables), None)
     if headline is None:
@@ -260,7 +300,7 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         f"<p>{_e(scenario.description)}</p>" if scenario.description else "",
         f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
         f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC</p>",
-        _verdict(lift, checks, warnings, reasons),
+        _verdict(lift, checks, warnings, reasons, outcomes, check_reasons),
         _table(headline) if headline is not None else "",
         f"<nav><ul>{nav}</ul></nav>",
         '<h2 id="particulars">Particulars</h2>',

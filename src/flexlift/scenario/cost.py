@@ -174,7 +174,12 @@ def estimate(scenario, bags: int | None = None, duration: float | None = None) -
     k = min(dof, max(PLANT_MODES, 2 + retained + CORRECTION_MODES))
     nr = min(2 + retained, k)
     strips = 4 * n if n <= FINE_MESH_ELEMENTS else COARSE_STRIPS
-    t_end = sim.duration_s if duration is None else float(duration)
+    if duration is not None:
+        t_end = float(duration)
+    elif sim.duration_s == "auto":
+        t_end = min(sim.longest_run_s, expected_run_s(scenario))
+    else:
+        t_end = float(sim.duration_s)
     steps = math.ceil(t_end / sim.time_step_s - 1e-9)
     rows = math.floor(t_end / max(sim.output_interval_s, sim.time_step_s)) + 1
     snaps = math.floor(t_end / max(sim.strength_interval_s, sim.time_step_s)) + 1
@@ -228,3 +233,12 @@ def check_modes(elements: int, modes: int | None, where: str) -> float:
             f"{_time(t)} estimated; at most {_time(MAX_SECONDS)}: ask for fewer modes "
             "(--modes) or elements")
     return t
+
+
+def expected_run_s(scenario) -> float:
+    """How long an ascent run until held takes, roughly [s], for ``duration_s: auto``: the
+    breakout (about five breakout times at the default pull), the rise at the planned speed
+    and the hold (the tanker: 2,000 + 1,500 + 600 = 4,100 s against 4,046 s simulated)."""
+    c, sim = scenario.control, scenario.simulation
+    return (5.0 * scenario.seabed.breakout_time_s + c.target_height_m / c.ascent_speed_m_s
+            + sim.hold_time_s)

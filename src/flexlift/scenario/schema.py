@@ -432,7 +432,9 @@ class Disturbance(_Section):
 class Simulation(_Section):
     """The time-domain run (SPEC §8)."""
 
-    duration_s: Duration = 6000.0  # stops earlier once the target has been held for hold_time_s
+    # stops earlier once the target has been held for hold_time_s; auto: runs until then, at
+    # most the longest run the limits below allow (longest_run_s)
+    duration_s: Duration | Literal["auto"] = 6000.0
     hold_time_s: Time = 600.0
     time_step_s: real(1.0e-4, 10) = 0.1  # integration step (at most the control period)
     # a number, or "auto": as many as the lift points need (ascent/plant.py retained_flexible)
@@ -448,8 +450,31 @@ class Simulation(_Section):
                              "or auto (one flexible mode per lift-point interval)")
         return v
 
+    @field_validator("duration_s", mode="before")
+    @classmethod
+    def _duration_or_auto(cls, v):
+        if isinstance(v, str) and v != "auto":
+            raise ValueError("a number is needed here, not text (write it without quotes), "
+                             "or auto (until the target has been held, at most the longest run)")
+        return v
+
+    @property
+    def longest_run_s(self) -> float:
+        """The longest run the limits allow at this time step and output interval [s]: at most
+        MAX_TIME_S, MAX_STEPS steps and MAX_ROWS stored rows (``duration_s: auto`` stops
+        there)."""
+        return float(min(MAX_TIME_S, MAX_STEPS * self.time_step_s,
+                         MAX_ROWS * max(self.output_interval_s, self.time_step_s)))
+
+    @property
+    def run_length_s(self) -> float:
+        """The duration of a run [s]: ``duration_s``, or :attr:`longest_run_s` for auto."""
+        return self.longest_run_s if self.duration_s == "auto" else float(self.duration_s)
+
     @model_validator(mode="after")
     def _check(self) -> Simulation:
+        if self.duration_s == "auto":
+            return self
         steps = self.duration_s / self.time_step_s
         if steps > MAX_STEPS:
             raise ValueError(

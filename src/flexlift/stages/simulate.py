@@ -119,6 +119,7 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
                       (per_point, per_bag))
                if out is not None else [])
     summary = result.summary()
+    summary["conclusion"] = _conclusion(mode, result.outcome)
     warnings += result.warnings
     tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"],
                     event_rows(result)),
@@ -127,6 +128,19 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
         tables.append(stress_table(result, scenario, mode))
     return StageOutput(name=f"simulate:{mode}", summary=summary, figures=figures, tables=tables,
                        warnings=warnings, criteria=result.criteria)
+
+
+#: the outcome of an ascent in the lead of its section
+OUTCOME_WORDS = {"safe": "safe", "unsafe": "unsafe", "not_achieved": "not achieved",
+                 "incomplete": "incomplete (not unsafe: the run ended first)"}
+
+
+def _conclusion(mode: str, outcome: dict) -> str:
+    """The section's first sentence: the outcome of the ascent and why."""
+    kind = outcome.get("kind")
+    if kind is None:
+        return ""
+    return f"Outcome ({mode} control): {OUTCOME_WORDS.get(kind, kind)}: {outcome.get('cause', '')}."
 
 
 def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
@@ -139,13 +153,14 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
     rows = [[m, o.summary["max_pitch_deg"], o.summary["max_ascent_velocity_ms"],
              o.summary["max_descent_velocity_ms"], o.summary["arrival_spread_s"],
              o.summary["max_bending_moment_MNm"], o.summary["max_utilisation"],
-             o.summary["gas_total_free_air_m3"], all(o.criteria.values())]
+             o.summary["gas_total_free_air_m3"], all(o.criteria.values()),
+             OUTCOME_WORDS.get(o.summary.get("outcome"), "–").split(" (")[0]]
             for m, o in zip(modes, outputs)]
     table = Table("Control modes compared",
                   ["control", "max pitch [deg]", "max ascent velocity [m/s]",
                    "max descent velocity [m/s]", "arrival spread [s]", "max bending moment [MN m]",
                    "max stress utilisation", "gas in all (initial fill + top-up), free air [m3]",
-                   "all criteria"], rows)
+                   "all criteria", "outcome"], rows)
     figures = []
     if out is not None:
         results = [load_netcdf(Path(out) / "results.nc", m) for m in modes]

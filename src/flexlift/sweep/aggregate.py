@@ -1,9 +1,15 @@
 """What a sweep's cases add up to: failure probabilities, influences, the dataset, the worst.
 
-- **Failure probability** of each criterion (and of ``all_criteria``, the lift being unsafe in
-  any way) per control mode: failed cases / cases run, with the 95 % Wilson score interval.
-  A mode whose numerics failed counts as failing every criterion (that the lift was safe is
-  not known); a lost case (its worker died twice) counts in neither.
+- **Outcomes** of each case and mode (:mod:`flexlift.ascent.outcome`): safe, unsafe (a limit
+  broken), not achieved (every limit held, the plan cannot finish), incomplete (every limit
+  held, the run ended first) or failed (numerics, an invalid combination of values, out of
+  memory: whether the lift was safe is not known). Each one's probability with its 95 %
+  Wilson score interval.
+- **Failure probability** of each criterion per control mode (failed cases / cases run, with
+  the Wilson interval), and of ``all_criteria``: the lift failing, that is unsafe, not achieved
+  or failed to run. An incomplete run is not a failure (it is a run too short to say); a mode
+  whose numerics failed counts as failing every criterion; a lost case (its worker died
+  twice) counts in neither.
 - **Influence** of each varied key: Spearman's rank correlation between the key's values and
   a criterion's failure (1 failed, 0 passed), or a headline number, over the cases run;
   ranked by its magnitude. Keys whose values do not vary, and criteria whose outcome does not
@@ -23,6 +29,9 @@ import xarray as xr
 #: z of a two-sided 95 % interval
 Z95 = 1.959963984540054
 ALL = "all_criteria"
+#: the outcomes of a mode's run, worst first, and those a failure probability counts
+OUTCOMES = ("unsafe", "not_achieved", "failed", "incomplete", "safe")
+FAILING = ("unsafe", "not_achieved", "failed")
 #: units of the headline numbers, by the end of their names
 UNITS = (("_ms", "m/s"), ("_deg", "deg"), ("_MNm", "MN m"), ("_MN", "MN"), ("_MPa", "MPa"),
          ("_m3", "m3"), ("_hours", "h"), ("_s", "s"))
@@ -94,14 +103,43 @@ def failed_criteria(result: dict, names: list[str]) -> list[str]:
     return [c for c in names if not result["criteria"].get(c, False)]
 
 
+def outcome_of(result: dict) -> str:
+    """A mode's outcome (one of :data:`OUTCOMES`); for a record written before outcomes were
+    kept (a resumed sweep), from its criteria: a limit failed is unsafe, only the target not
+    reached is not achieved (whether it was merely too short is not known)."""
+    if result["status"] != "completed":
+        return "failed"
+    kind = result.get("outcome")
+    if kind in OUTCOMES:
+        return kind
+    crit = result.get("criteria", {})
+    if any(not ok for k, ok in crit.items() if k != "reached_target"):
+        return "unsafe"
+    return "safe" if crit.get("reached_target", True) else "not_achieved"
+
+
+def failing(result: dict) -> bool:
+    """Whether a mode's run counts as a failure of the lift (:data:`FAILING`)."""
+    return outcome_of(result) in FAILING
+
+
 def failure_probability(records: dict, modes) -> dict:
-    """{mode: {criterion: wilson(...)}}, with ``all_criteria`` last."""
+    """{mode: {criterion: wilson(...)}}, with ``all_criteria`` (the lift failing) last."""
     out = {}
     for mode in modes:
         rs, names = ran(records, mode), criteria_names(records, mode)
         fails = [failed_criteria(r["results"][mode], names) for r in rs]
         out[mode] = {c: wilson(sum(c in f for f in fails), len(rs)) for c in names}
-        out[mode][ALL] = wilson(sum(bool(f) or not names for f in fails), len(rs))
+        out[mode][ALL] = wilson(sum(failing(r["results"][mode]) for r in rs), len(rs))
+    return out
+
+
+def outcome_probability(records: dict, modes) -> dict:
+    """{mode: {outcome: wilson(...)}} for every outcome but safe, worst first."""
+    out = {}
+    for mode in modes:
+        kinds = [outcome_of(r["results"][mode]) for r in ran(records, mode)]
+        out[mode] = {k: wilson(kinds.count(k), len(kinds)) for k in OUTCOMES if k != "safe"}
     return out
 
 
@@ -127,8 +165,9 @@ def sensitivity(records: dict, modes, keys) -> dict:
         fails = [failed_criteria(r["results"][mode], names) for r in rs]
         xs = {k: numeric([r["values"][k] for r in rs]) for k in keys}
         out[mode] = {}
+        bad = [failing(r["results"][mode]) for r in rs]
         for c in [*names, ALL]:
-            y = [float(bool(f)) if c == ALL else float(c in f) for f in fails]
+            y = [float(b) for b in bad] if c == ALL else [float(c in f) for f in fails]
             out[mode][c] = _ranked({k: spearman(x, y) for k, x in xs.items()})
     return out
 
@@ -163,12 +202,14 @@ def headline_sensitivity(records: dict, modes, keys) -> dict:
 
 
 def severity(result: dict, names: list[str], limits: dict) -> tuple:
-    """Sort key of a worst case (larger is worse): numerics failed, criteria failed, then
+    """Sort key of a worst case (larger is worse): numerics failed, a failing outcome, criteria
+    failed, then
     how close the speeds, the pitch and the hull stress came to their ``limits``
     ({headline number: limit}; the nearest counts)."""
     h = result.get("headline", {})
     margin = max([(h.get(k) or 0.0) / lim for k, lim in limits.items() if lim] or [0.0])
-    return (result["status"] != "completed", len(failed_criteria(result, names)), margin)
+    return (result["status"] != "completed", failing(result), len(failed_criteria(result, names)),
+            margin)
 
 
 def worst_cases(records: dict, mode: str, n: int, base) -> list[int]:
@@ -215,7 +256,8 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Da
     crit = list(dict.fromkeys(c for m in modes for c in criteria_names(records, m)))
     head = list(dict.fromkeys(h for m in modes for h in headline_names(records, m)))
     shape = (n, len(modes))
-    text = {v: np.full(shape, "", dtype=object) for v in ("mode_status", "error", "events", "failed_criteria")}
+    text = {v: np.full(shape, "", dtype=object) for v in ("mode_status", "outcome", "cause", "error",
+                                                          "events", "failed_criteria")}
     flags = {c: np.full(shape, -1, dtype=np.int8) for c in [*crit, ALL]}
     nums = {h: np.full(shape, np.nan) for h in head}
     for i, r in enumerate(recs):
@@ -227,12 +269,14 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Da
             names_m = criteria_names(records, m)
             failed = failed_criteria(res, names_m)
             text["mode_status"][i, j] = res["status"]
+            text["outcome"][i, j] = outcome_of(res)
+            text["cause"][i, j] = res.get("cause") or ""
             text["error"][i, j] = res.get("error") or ""
             text["events"][i, j] = _events_text(res.get("events", []))
             text["failed_criteria"][i, j] = ", ".join(failed)
             for c in names_m:
                 flags[c][i, j] = 0 if c in failed else 1
-            flags[ALL][i, j] = 0 if failed or not names_m else 1
+            flags[ALL][i, j] = 0 if failing(res) else 1
             for h, v in res.get("headline", {}).items():
                 if v is not None and h in nums:
                     nums[h][i, j] = float(v)
@@ -241,7 +285,8 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Da
     flag_attrs = {"flag_values": np.array([-1, 0, 1], dtype=np.int8),
                   "flag_meanings": "not_run failed passed"}
     for c, arr in flags.items():
-        long = "every criterion" if c == ALL else f"criterion {c}"
+        long = ("the lift: unsafe, not achieved or failed to run (0); safe or incomplete (1)"
+                if c == ALL else f"criterion {c}")
         data[f"criterion_{c}"] = (("case", "control"), arr, {**flag_attrs, "long_name": long})
     for h, arr in nums.items():
         data[h] = (("case", "control"), arr, {"units": _unit(h), "long_name": f"headline {h}"})

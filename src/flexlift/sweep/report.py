@@ -80,25 +80,49 @@ def _variations(spec) -> str:
             + _table(["key", "distribution"], rows))
 
 
+#: the outcomes' rows in the probability table (flexlift.ascent.outcome)
+OUTCOME_ROWS = {
+    "unsafe": "unsafe: a limit broken",
+    "not_achieved": "not achieved: every limit held, the plan cannot finish",
+    "failed": "failed to run: numerics, invalid values or out of memory",
+    "incomplete": "incomplete: every limit held, the run ended first (not a failure)",
+}
+
+
+def _row(name: str, w: dict, bad: bool = True) -> list[str]:
+    cls = "fail" if w["failed"] and bad else "pass"
+    return [_e(name), f'<span class="{cls}">{w["failed"]}</span> / {w["n"]}', _pct(w["p"]),
+            f"{_pct(w['low'])} – {_pct(w['high'])}"]
+
+
 def _probabilities(summary: dict, mode: str) -> str:
     fp = summary["by_control"][mode]
-    rows = []
-    for c, w in fp.items():
-        name = "every criterion (an unsafe lift)" if c == agg.ALL else c.replace("_", " ")
-        cls = "fail" if w["failed"] else "pass"
-        rows.append([_e(name), f'<span class="{cls}">{w["failed"]}</span> / {w["n"]}',
-                     _pct(w["p"]), f"{_pct(w['low'])} – {_pct(w['high'])}"])
-    return _table(["criterion", "cases failed", "probability of failure", "95 % interval (Wilson)"], rows)
+    rows = [_row(c.replace("_", " "), w) for c, w in fp.items() if c != agg.ALL]
+    out = summary.get("outcomes_by_control", {}).get(mode, {})
+    rows += [_row(OUTCOME_ROWS[k], w, k != "incomplete") for k, w in out.items()
+             if k in OUTCOME_ROWS]
+    if agg.ALL in fp:
+        rows.append(_row("the lift fails: unsafe, not achieved or failed to run", fp[agg.ALL]))
+    return _table(["criterion or outcome", "cases", "probability", "95 % interval (Wilson)"], rows)
 
 
 def _verdict(summary: dict, mode: str) -> str:
     w = summary["by_control"][mode].get(agg.ALL)
     if not w or not w["n"]:
         return f'<div class="verdict">{_e(mode)}: no case ran.</div>'
-    safe, lo, hi = 1 - w["p"], 1 - w["high"], 1 - w["low"]
-    return (f'<div class="verdict"><b>{_e(mode)} control:</b> the lift met every criterion in '
-            f"{w['n'] - w['failed']} of {w['n']} cases: probability of a safe lift {_pct(safe)} "
-            f"(95 % interval {_pct(lo)} – {_pct(hi)}).</div>")
+    o = summary.get("outcomes_by_control", {}).get(mode, {})
+    count = {k: o[k]["failed"] for k in OUTCOME_ROWS if k in o}
+    safe = w["n"] - w["failed"] - count.get("incomplete", 0)
+    parts = [f"{n} {k.replace('_', ' ')}" for k, n in count.items() if n]
+    more = ""
+    if count.get("incomplete"):
+        more = (f" {count['incomplete']} case(s) ended before the target was held with every "
+                "limit kept: not failures; a longer run (simulation.duration_s, or auto) says "
+                "how they end.")
+    return (f'<div class="verdict"><b>{_e(mode)} control:</b> safe in {safe} of {w["n"]} cases'
+            + (f" ({', '.join(parts)})" if parts else "")
+            + f": probability of failure (unsafe, not achieved or failed to run) {_pct(w['p'])} "
+            f"(95 % interval {_pct(w['low'])} – {_pct(w['high'])}).{more}</div>")
 
 
 def _influence(summary: dict, mode: str, keys) -> str:
@@ -129,7 +153,8 @@ def _worst(summary: dict, mode: str, rerun: dict, keys) -> str:
         vals = "<br>".join(f"{_e(k)} = {_num(w['values'].get(k))}" for k in keys)
         h = w["headline"]
         why = [f"{_e(c)}: {_e(w.get('reasons', {}).get(c, 'failed'))}" for c in w["failed"]]
-        failed = "<br>".join(why) or "none"
+        failed = (f"<b>{_e(w.get('outcome', '').replace('_', ' '))}</b><br>" if w.get("outcome")
+                  else "") + ("<br>".join(why) or "none")
         path = rerun.get(w["case"])
         cmd = (f"<code>flexlift run {_e(path)} --control {_e(mode)}</code>" if path else "–")
         rows.append([_e(w["name"]), vals, f'<span class="{"fail" if w["failed"] else "pass"}">'
@@ -177,7 +202,9 @@ def render_report(result, summary: dict, rerun: dict) -> str:
         parts += [f"<h2>Probability of failure: {_e(m)} control</h2>", _probabilities(summary, m),
                   "<p class='meta'>A case whose numerics failed, or whose values do not make a "
                   "valid scenario (e.g. a lift plan that cannot be laid out), counts as failing "
-                  "every criterion; lost cases are not counted.</p>",
+                  "every criterion and as failed to run; an incomplete case (every limit held, "
+                  "the run ended before the target was held) fails the criterion reached target "
+                  "but is not a failure of the lift; lost cases are not counted.</p>",
                   f"<h2>Influence of the keys: {_e(m)} control</h2>", _influence(summary, m, keys),
                   _figure(plots.tornado(summary["headline_sensitivity"], m, keys),
                           f"Spearman rank correlation of each key with the headline numbers ({m} control): "

@@ -5,9 +5,10 @@ results at the end.
 keeps at most ``engine.window`` cases in flight, and writes each case's record as soon as it
 returns. A case whose worker died (a killed process, a lost Dask worker) is retried once, on
 its own (so that a case that kills its worker cannot take an innocent one down with it
-twice); if it dies again it is recorded as lost. Ctrl-C (or any exception, such as a lost Dask
-scheduler: :class:`~flexlift.sweep.executors.SchedulerLost`) stops the engine and leaves
-every finished case in the folder for the rerun.
+twice); if it dies again it is recorded as lost. A case that raises a programming error
+(:class:`~flexlift.sweep.worker.CaseError`) stops the sweep like Ctrl-C (or any exception,
+such as a lost Dask scheduler: :class:`~flexlift.sweep.executors.SchedulerLost`): the engine
+stops and every finished case stays in the folder for the rerun.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from flexlift.sweep import aggregate as agg
 from flexlift.sweep.cases import Case, case_name, case_scenario, changes, make_cases
 from flexlift.sweep.spec import SweepSpec
 from flexlift.sweep.store import SweepFolder
-from flexlift.sweep.worker import Task, run_case
+from flexlift.sweep.worker import CaseError, Task, run_case
 
 log = logging.getLogger(__name__)
 #: how often the coordinator wakes up while waiting for a case (progress stays live) [s]
@@ -179,10 +180,14 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
         while queue and not suspects and len(inflight) < engine.window:
             _submit(engine, spec, queue.popleft(), attempts, inflight)
         done, _ = cf.wait(list(inflight), timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
+        bug = None
         for f in done:
             case = inflight.pop(f)
             try:
                 record, datasets = f.result()
+            except CaseError as exc:  # a programming error: stop, once the others are kept
+                bug = bug or exc
+                continue
             except Exception as exc:  # the case never returned (run_case records its errors)
                 if not worker_lost(exc):  # e.g. flexlift cannot be imported on a Dask worker
                     record, datasets = _broken(case, exc), {}
@@ -197,6 +202,8 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
             records[case.index] = folder.write_case(names[case.index], record, datasets)
             if progress is not None:
                 progress(len(records), total, _failures(records))
+        if bug is not None:
+            raise bug
         check = getattr(engine, "check", None)
         if check is not None:  # a lost Dask scheduler ends the sweep (executors.SchedulerLost)
             check()
@@ -284,6 +291,7 @@ def summarize(result: SweepResult) -> dict:
     spec, records = result.spec, result.records
     modes, keys = spec.controls, spec.keys
     fp = agg.failure_probability(records, modes)
+    op = agg.outcome_probability(records, modes)
     sens = agg.sensitivity(records, modes, keys)
     one = len(modes) == 1
     flat_fp = {(c if one else f"{m}.{c}"): v for m in modes for c, v in fp[m].items()}
@@ -291,6 +299,8 @@ def summarize(result: SweepResult) -> dict:
     worst = {m: [{"case": i, "name": case_name(spec, i), "values": records[i]["values"],
                   "failed": agg.failed_criteria(records[i]["results"][m], agg.criteria_names(records, m)),
                   "error": records[i]["results"][m].get("error"),
+                  "outcome": agg.outcome_of(records[i]["results"][m]),
+                  "cause": records[i]["results"][m].get("cause"),
                   "reasons": records[i]["results"][m].get("reasons", {}),
                   "headline": records[i]["results"][m].get("headline", {})}
                  for i in agg.worst_cases(records, m, spec.worst, spec.base)] for m in modes}
@@ -306,7 +316,9 @@ def summarize(result: SweepResult) -> dict:
         "elapsed_s": result.elapsed_s, "base": spec.base.name, "base_ref": spec.base_ref,
         "method": spec.method, "samples": spec.samples, "seed": spec.seed,
         "controls": list(modes), "keys": list(keys), "spec_checksum": spec.checksum(),
-        "by_control": fp, "sensitivity_by_control": sens,
+        "outcome_probability": {(k if one else f"{m}.{k}"): v for m in modes
+                                for k, v in op[m].items()},
+        "by_control": fp, "outcomes_by_control": op, "sensitivity_by_control": sens,
         "headline_sensitivity": agg.headline_sensitivity(records, modes, keys),
         "worst": worst, "failures": failures,
         "warnings": [[w, n] for w, n in warnings.most_common(20)],

@@ -1,21 +1,28 @@
 """One case, run where a worker runs it: every control mode's ascent, reduced to a record.
 
-:func:`run_case` never raises for anything a case can do: a scenario whose combination of
-values is invalid, numerics that fail, or a bug in a control mode are recorded in the case's
-record (``status`` and the mode's ``error``) and the sweep goes on. Only the loss of the worker
-itself (a killed process, a lost machine) reaches the caller, which retries the case once.
+What a case can do is data: a scenario whose combination of values is invalid
+(:class:`~flexlift.errors.InputError`), numerics that fail
+(:class:`~flexlift.errors.SimulationError`, with the partial results) and a case too large for
+the memory (``MemoryError``, with the case's size) are recorded in the case's record
+(``status`` and the mode's ``error``) and the sweep goes on. Any other exception is a
+programming error, not a failure of the lift: :func:`run_case` raises :class:`CaseError` (the
+case, the mode and the traceback, picklable for any engine), and the sweep stops with the
+finished cases kept. The loss of the worker itself (a killed process, a lost machine) reaches
+the caller, which retries the case once.
 
 A record (JSON-ready)::
 
     {"case": 42, "values": {...}, "status": "completed" | "failed",
      "results": {"coordinated": {"status": "completed" | "failed", "error": None | "...",
+                                 "outcome": "safe" | "unsafe" | "not_achieved" |
+                                            "incomplete" | "failed", "cause": "...",
                                  "criteria": {...}, "headline": {...}, "reasons": {...},
                                  "events": [...],
                                  "scenario_checksum": "..."}},
      "warnings": [...], "elapsed_s": 0.14, "pid": 1234, "host": "..."}
 
-A mode whose numerics failed has every criterion ``False`` (whether the lift was safe is not
-known) and the headline numbers of its partial result.
+A mode whose numerics failed has every criterion ``False`` and the outcome ``failed``
+(whether the lift was safe is not known) and the headline numbers of its partial result.
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ import os
 import socket
 import threading
 import time
+import traceback
 from dataclasses import dataclass
 
 from flexlift.errors import InputError, SimulationError, clean
@@ -35,6 +43,22 @@ log = logging.getLogger(__name__)
 ROUTINE = ("arrival",)
 #: most distinct warnings kept per case
 MAX_WARNINGS = 5
+
+
+class CaseError(Exception):
+    """A programming error while running a case (not a result of the lift): the sweep stops.
+    ``case`` its index, ``mode`` the control mode (None: building the scenario), ``trace``
+    the worker's formatted traceback."""
+
+    def __init__(self, case: int, mode: str | None, trace: str):
+        super().__init__(case, mode, trace)
+        self.case, self.mode, self.trace = case, mode, trace
+
+    def __str__(self) -> str:
+        last = self.trace.strip().splitlines()[-1] if self.trace.strip() else "an exception"
+        where = f"case {self.case}" + (f" ({self.mode} control)" if self.mode else "")
+        return (f"{where} raised {clean(last, 200)}: a programming error, not a result of the "
+                "lift; the sweep stopped")
 
 
 @dataclass(frozen=True)
@@ -108,8 +132,13 @@ def run_case(task: Task) -> tuple[dict, dict]:
             record["status"] = "failed"
             record["results"] = {m: _failed(msg) for m in task.controls}
             return record, datasets
+        except Exception:
+            raise CaseError(task.index, None, traceback.format_exc()) from None
         for mode in task.controls:
-            res, ds = _one_mode(scenario, mode)
+            try:
+                res, ds = _one_mode(scenario, mode)
+            except Exception:
+                raise CaseError(task.index, mode, traceback.format_exc()) from None
             record["results"][mode] = res
             if task.histories and ds is not None:
                 datasets[mode] = ds
@@ -129,7 +158,19 @@ def _failed(msg: str, partial=None) -> dict:
     if partial is not None:
         out.update(_digest(partial))
         out["criteria"] = {k: False for k in out["criteria"]}
+    out.update(outcome="failed", cause=msg)
     return out
+
+
+def _size(scenario) -> str:
+    """The size of a case, for an out-of-memory record."""
+    sim = scenario.simulation
+    steps = sim.run_length_s / sim.time_step_s
+    bags = scenario.lift.bags
+    n_bags = (sum(b.count for b in bags) if bags is not None else
+              "the layout's") if scenario.pipe is None else "the pipe's"
+    return (f"{scenario.hull.elements:,} elements, {n_bags} bags, {steps:,.0f} time steps of "
+            f"{sim.time_step_s:g} s, {sim.retained_flexible_modes} retained flexible modes")
 
 
 def _one_mode(scenario, mode: str) -> tuple[dict, object]:
@@ -144,10 +185,7 @@ def _one_mode(scenario, mode: str) -> tuple[dict, object]:
     except InputError as exc:
         return _failed(f"invalid scenario: {clean(str(exc), 300)}"), None
     except MemoryError:
-        return _failed("out of memory"), None
-    except Exception as exc:  # a bug in one mode must not stop the sweep: recorded, logged
-        log.debug("case failed", exc_info=True)
-        return _failed(f"internal error: {type(exc).__name__}: {clean(str(exc), 200)}"), None
+        return _failed(f"out of memory ({_size(scenario)})"), None
     out = {"status": "completed", "error": None, **_digest(result)}
     return out, result.dataset
 
@@ -158,6 +196,8 @@ def _digest(result) -> dict:
         if e["kind"] not in ROUTINE and e["kind"] not in seen:
             seen.add(e["kind"])
             events.append({"time_s": e["time_s"], "kind": e["kind"], "bag": e["bag"]})
-    return {"criteria": dict(result.criteria), "headline": dict(result.headline),
+    outcome = result.outcome
+    return {"outcome": outcome.get("kind"), "cause": outcome.get("cause"),
+            "criteria": dict(result.criteria), "headline": dict(result.headline),
             "reasons": dict(result.reasons), "events": events,
             "scenario_checksum": result.dataset.attrs.get("scenario_checksum")}
