@@ -149,8 +149,7 @@ def initial_equilibrium(loop):
 def final_row(t, loop):
     """A recorded row of the current state (:class:`LoopInputs`), at the end of a run."""
     plant, controllers, control_state, state, switches, settings, recorder = _structs(loop)
-    store_row(t, plant, controllers, control_state, state,
-              switches, recorder)
+    store_row(t, plant, controllers, control_state, state, switches, recorder)
 
 
 @jit
@@ -183,8 +182,7 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
                         state.wv, state.line, state.contact, state.active)
     generalised_force(plant, state.line, state.point, state.b)
     if k % settings.k_out == 0:
-        store_row(t, plant, controllers, control_state, state,
-                  switches, recorder)
+        store_row(t, plant, controllers, control_state, state, switches, recorder)
     if k % settings.k_str == 0:
         store_snapshot(t, plant, state, switches, noise, recorder)
     if events(t, plant, state, switches, settings, recorder, w_min) != RET_DONE:

@@ -31,8 +31,7 @@ def log_event(recorder, t, code, index, value):
 
 
 @jit
-def store_row(t, plant, controllers, control_state, state,
-              switches, recorder):
+def store_row(t, plant, controllers, control_state, state, switches, recorder):
     """One output row of the current state (after :func:`flexlift.ascent.mechanics.
     strip_loads` and the bag forces of this step)."""
     r = recorder.counts[0]
