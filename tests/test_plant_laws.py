@@ -130,7 +130,7 @@ def test_the_wet_heave_on_the_seabed_springs(plant):
     M_wet, and every modal entry the springs' integral over the strips."""
     a = plant
     active = np.ones(a.strips.ns, np.bool_)
-    stiff, damp = _contact(a.strips, active)
+    stiff, damp = _contact(a.records, active)
     assert stiff[0, 0] == pytest.approx(SB.contact_stiffness_N_m2 * L / M_WET, rel=1e-9)
     assert damp[0, 0] == pytest.approx(SB.contact_damping_Ns_m2 * L / M_WET, rel=1e-9)
     np.testing.assert_allclose(stiff, (a.strips.force * SB.contact_stiffness_N_m2) @ a.strips.shape,
@@ -196,12 +196,13 @@ def test_released_suction_pulls_down_in_its_shape(plant):
 
 
 @numba.njit
-def _strip_loads(strips, q, v, H, sep, current):
-    """The loop's strip loads of a plant's ``strips`` at modal state q, q' (no force noise)."""
-    ns = strips.ns
+def _strip_loads(plant, q, v, H, sep, current):
+    """The loop's strip loads of ``plant`` (its records) at modal state q, q' (no force
+    noise)."""
+    ns = plant.strips.ns
     w, wv, line, contact = np.empty(ns), np.empty(ns), np.empty(ns), np.empty(ns)
     active = np.zeros(ns, np.bool_)
-    strip_loads(as_struct(strips), q, v, H, sep, current, np.zeros(ns), w, wv, line, contact,
+    strip_loads(as_struct(plant), q, v, H, sep, current, np.zeros(ns), w, wv, line, contact,
                 active)
     return line, contact, active
 
@@ -221,7 +222,7 @@ def test_seabed_contact_as_the_loop_applies_it(plant, held, w, wdot, load):
     expected = {"k": -k * w, "k+c": -k * w - c * wdot}.get(load, load)
     q, v = np.zeros(a.modal.nr), np.zeros(a.modal.nr)
     q[0], v[0] = w / a.modal.heave_row[0], wdot / a.modal.heave_row[0]
-    line, contact, active = _strip_loads(a.strips, q, v, np.zeros(1), np.array([not held]), 0.0)
+    line, contact, active = _strip_loads(a.records, q, v, np.zeros(1), np.array([not held]), 0.0)
     np.testing.assert_allclose(contact, expected, rtol=1e-12, atol=1e-9)
     assert active.all() == (held or expected != 0.0) and active.all() == active.any()
 
@@ -348,28 +349,28 @@ def test_separation_is_located_inside_the_step_then_the_hold_releases(plant):
 
 # ----------------------------------------------------------------------------- mechanics
 @numba.njit
-def _contact(strips, active):
+def _contact(plant, active):
     """The loop's modal contact stiffness and damping of the ``active`` strips."""
-    nr = strips.shape.shape[1]
+    nr = plant.modal.nr
     stiff, damp = np.zeros((nr, nr)), np.zeros((nr, nr))
-    contact_matrices(as_struct(strips), active, stiff, damp)
+    contact_matrices(as_struct(plant), active, stiff, damp)
     return stiff, damp
 
 
 @numba.njit
-def _mechanics(modal, strips, q, v, b, h, active, n):
-    """``n`` steps of ``h`` [s] of the loop's implicit mechanics on a plant (its ``modal`` and
-    ``strips`` records) under a constant force ``b``, with the contact springs of the
-    ``active`` strips; q at every step."""
-    ms, ss = as_struct(modal), as_struct(strips)
+def _mechanics(plant, q, v, b, h, active, n):
+    """``n`` steps of ``h`` [s] of the loop's implicit mechanics on ``plant`` (its records)
+    under a constant force ``b``, with the contact springs of the ``active`` strips; q at
+    every step."""
+    ps = as_struct(plant)
     nr = q.size
     stiff, damp = np.zeros((nr, nr)), np.zeros((nr, nr))
     implicit, work = np.zeros((nr, nr)), np.zeros(nr)
-    contact_matrices(ss, active, stiff, damp)
-    implicit_matrix(ms, h, stiff, damp, implicit)
+    contact_matrices(ps, active, stiff, damp)
+    implicit_matrix(ps, h, stiff, damp, implicit)
     out = np.empty((n, nr))
     for k in range(n):
-        trapezoidal_step(ms, q, v, b, h, implicit, stiff, damp, work)
+        trapezoidal_step(ps, q, v, b, h, implicit, stiff, damp, work)
         out[k] = q
     return out
 
@@ -385,7 +386,7 @@ def test_modal_damping_is_two_zeta_omega(plant):
         h = 2 * math.pi / om / 2000
         q = np.zeros(a.modal.nr)
         q[j] = 1.0
-        out = _mechanics(a.modal, a.strips, q, np.zeros(a.modal.nr), np.zeros(a.modal.nr), h, np.zeros(a.strips.ns, np.bool_), 6000)
+        out = _mechanics(a.records, q, np.zeros(a.modal.nr), np.zeros(a.modal.nr), h, np.zeros(a.strips.ns, np.bool_), 6000)
         t = h * np.arange(1, 6001)
         wd = om * math.sqrt(1 - zeta**2)
         exact = np.exp(-zeta * om * t) * (np.cos(wd * t) + zeta * om / wd * np.sin(wd * t))
@@ -410,7 +411,7 @@ def test_the_step_is_the_trapezoidal_rule(plant, contact):
     M = np.block([[I, -h / 2 * I], [h / 2 * K, I + h / 2 * C]])
     rhs = np.concatenate([q0 + h / 2 * v0, v0 + h / 2 * (b - K @ q0 - C @ v0) + h / 2 * b])
     q1 = np.linalg.solve(M, rhs)[:a.modal.nr]
-    out = _mechanics(a.modal, a.strips, q0.copy(), v0.copy(), b, h, active, 1)
+    out = _mechanics(a.records, q0.copy(), v0.copy(), b, h, active, 1)
     np.testing.assert_allclose(out[0], q1, rtol=1e-10, atol=1e-12)
 
 

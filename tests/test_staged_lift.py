@@ -98,12 +98,12 @@ def test_contact_springs_updated_strip_by_strip_equal_a_rebuild(line):
     rng = np.random.default_rng(1)
     last = rng.random(a.strips.ns) < 0.5
     stiff, damp = np.zeros((a.modal.nr, a.modal.nr)), np.zeros((a.modal.nr, a.modal.nr))
-    contact_matrices(a.strips, last, stiff, damp)
+    contact_matrices(a.records, last, stiff, damp)
     for _ in range(20):
         now = last ^ (rng.random(a.strips.ns) < 0.05)
-        update_contact_matrices(a.strips, now, last, stiff, damp)
+        update_contact_matrices(a.records, now, last, stiff, damp)
         K, C = np.zeros_like(stiff), np.zeros_like(damp)
-        contact_matrices(a.strips, now, K, C)
+        contact_matrices(a.records, now, K, C)
         assert np.abs(stiff - K).max() <= 1e-9 * np.abs(K).max()
         assert np.abs(damp - C).max() <= 1e-9 * np.abs(C).max()
         last = now

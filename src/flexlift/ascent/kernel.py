@@ -24,8 +24,8 @@ each of its records into a struct passed by reference (:func:`flexlift._struct.a
 :mod:`flexlift.ascent.records`), ``controllers`` and ``control_state`` (the controllers'
 constants and memory, :mod:`flexlift.control.controller`), ``state``, ``switches``,
 ``settings`` and ``recorder`` (:mod:`flexlift.ascent.state`). Every function here takes, by
-these names, the records it reads; the laws of :mod:`flexlift.ascent.mechanics` take the one
-plant record they need (``bags``, ``strips``, ``modal``).
+these names, the records it reads (the laws of :mod:`flexlift.ascent.mechanics` the plant, and
+the state's arrays they work on); the plant's parts are read through it (``plant.bags``).
 
 **Extending the loop** means adding fields and a branch in the function of the law, never a
 positional argument:
@@ -47,7 +47,8 @@ positional argument:
   :class:`flexlift.ascent.loop.Ascent`), read where it applies;
 - *a new kind of record*: a field of ``LoopInputs``, its struct in ``_structs``, and a
   parameter of only the functions that read it (each struct a function takes costs a
-  reference count per call: a record of its own is for data most functions do not need).
+  reference count per call, as does a struct read out of another and passed on: a new part
+  of the plant is a field of ``PlantRecords``, read as ``plant.part``, not an argument).
 
 Renaming or removing a record's class leaves numba's on-disk cache index naming the old
 class: delete the ``*.nbi``/``*.nbc`` files of ``__pycache__`` after such a change.
@@ -135,10 +136,10 @@ def initial_equilibrium(loop):
     coordinates at rest on the held seabed springs under them (least squares: the paper's
     bag models have a mode that their one spring does not hold)."""
     plant, controllers, control_state, state, switches, settings, recorder = _structs(loop)
-    bag_motion(plant.bags, state.q, state.v, state.z, state.zd)
-    bag_gas(plant.bags, state.n, state.z, state.p, state.V)
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
+    bag_gas(plant, state.n, state.z, state.p, state.V)
     _loads_at_state(plant, state, switches, switches.noise[0])
-    contact_matrices(plant.strips, state.active, state.stiff, state.damp)
+    contact_matrices(plant, state.active, state.stiff, state.damp)
     K = state.stiff.copy()
     for i in range(plant.modal.nr):
         K[i, i] += plant.modal.omega2[i]
@@ -169,16 +170,16 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
     k = state.counters[0]
     t = k * settings.dt
     if not state.counters[1] & F_FRESH:  # the bags' motion and gas of this state, once
-        bag_motion(plant.bags, state.q, state.v, state.z, state.zd)
-        bag_gas(plant.bags, state.n, state.z, state.p, state.V)
+        bag_motion(plant, state.q, state.v, state.z, state.zd)
+        bag_gas(plant, state.n, state.z, state.p, state.V)
         state.counters[1] |= F_FRESH
     if k % settings.k_ctrl == 0 and control(t, k, plant, controllers, control_state, state,
                                             switches, settings) == RET_NEED_U:
         return RET_NEED_U
     noise = switches.noise[k - switches.chunk[0]] if switches.chunk[0] >= 0 else switches.noise[0]
     cur = switches.current[0]
-    bag_forces(plant.bags, state.V, state.zd, switches.attached, cur, state.point)
-    w_min = strip_loads(plant.strips, state.q, state.v, state.H, state.sep, cur, noise, state.w,
+    bag_forces(plant, state.V, state.zd, switches.attached, cur, state.point)
+    w_min = strip_loads(plant, state.q, state.v, state.H, state.sep, cur, noise, state.w,
                         state.wv, state.line, state.contact, state.active)
     generalised_force(plant, state.line, state.point, state.b)
     if k % settings.k_out == 0:
@@ -381,11 +382,11 @@ def mechanics(plant, state, switches, settings, w_min, noise):
 @jit
 def _loads_at_state(plant, state, switches, noise):
     """The loads of the current (sub-step) state, into ``state``."""
-    bag_motion(plant.bags, state.q, state.v, state.z, state.zd)
-    bag_gas(plant.bags, state.n, state.z, state.p, state.V)
-    bag_forces(plant.bags, state.V, state.zd, switches.attached, switches.current[0],
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
+    bag_gas(plant, state.n, state.z, state.p, state.V)
+    bag_forces(plant, state.V, state.zd, switches.attached, switches.current[0],
                state.point)
-    strip_loads(plant.strips, state.q, state.v, state.H, state.sep, switches.current[0], noise,
+    strip_loads(plant, state.q, state.v, state.H, state.sep, switches.current[0], noise,
                 state.w, state.wv, state.line, state.contact, state.active)
     generalised_force(plant, state.line, state.point, state.b)
 
@@ -404,15 +405,15 @@ def _implicit_step(plant, state, h, b_mid):
                 break
     if changed or state.scalars[3] != h:
         if not valid:
-            contact_matrices(plant.strips, state.active, state.stiff, state.damp)
+            contact_matrices(plant, state.active, state.stiff, state.damp)
         elif changed:
-            update_contact_matrices(plant.strips, state.active, state.last_active, state.stiff,
+            update_contact_matrices(plant, state.active, state.last_active, state.stiff,
                                     state.damp)
-        implicit_matrix(plant.modal, h, state.stiff, state.damp, state.implicit)
+        implicit_matrix(plant, h, state.stiff, state.damp, state.implicit)
         state.last_active[:] = state.active
         state.scalars[3] = h
         state.counters[1] |= F_MATRIX
-    trapezoidal_step(plant.modal, state.q, state.v, b_mid, h, state.implicit, state.stiff,
+    trapezoidal_step(plant, state.q, state.v, b_mid, h, state.implicit, state.stiff,
                      state.damp, state.work[3])
 
 
@@ -422,9 +423,9 @@ def finish_step(t, plant, state, switches, settings, recorder, noise):
     the bags' motion and gas of the new state in ``state`` (fresh for the next step). A group that
     separated inside the step moves freely for the rest of it."""
     dt = settings.dt
-    bag_motion(plant.bags, state.q, state.v, state.z, state.zd)
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
     for i in range(plant.bags.nb):
-        n = _gas_step(i, dt, plant.bags, state, switches)
+        n = _gas_step(i, dt, plant, state, switches)
         p = state.p[i]
         # spill, relief venting
         out = vented_moles(n, p, plant.bags.capacity[i], plant.bags.relief[i], plant.bags.RT)
@@ -452,10 +453,11 @@ def finish_step(t, plant, state, switches, settings, recorder, noise):
 
 
 @jit
-def _gas_step(i, dt, bags, state, switches):
+def _gas_step(i, dt, plant, state, switches):
     """Bag ``i``'s gas [mol] at the end of the step (Heun: the rates at the start and at an
     Euler prediction at the new height, averaged; the commands are held over the step), with
     the accounts of the step's flows; leaves the new pressure in state.p."""
+    bags = plant.bags
     fill = state.fill[i] * switches.supply[i]
     p0, purge0 = state.flow0[0, i], state.flow0[1, i]
     p1 = ambient_pressure(state.z[i], bags.water_depth, bags.p_atm, bags.rho_g)
@@ -512,8 +514,8 @@ def separations(t, plant, state, switches, settings, recorder, noise):
             _loads_at_state(plant, state, switches, noise)
             _implicit_step(plant, state, h, state.b)
     state.counters[1] &= ~F_HAVE_B  # the suction's load steps in: restart the extrapolation
-    bag_motion(plant.bags, state.q, state.v, state.z, state.zd)
-    bag_gas(plant.bags, state.n, state.z, state.p, state.V)
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
+    bag_gas(plant, state.n, state.z, state.p, state.V)
 
 
 @jit

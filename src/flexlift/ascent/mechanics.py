@@ -16,6 +16,10 @@ in contact (implicit, so the stiff seabed penalty is stable at any step) and b e
 generalised force, extrapolated to mid-step (Adams-Bashforth 2): the trapezoidal rule
 (Newmark's average acceleration, second order, A-stable). The implicit matrix is cached and
 rebuilt only when the set of strips in contact changes, or the step length does.
+
+Each law takes the plant (:class:`~flexlift.ascent.records.PlantRecords`, a struct in the loop)
+and reads the part it needs (``bags = plant.bags``): passing the part itself would cost the
+loop a reference count per call.
 """
 
 from __future__ import annotations
@@ -30,33 +34,37 @@ from flexlift.physics.seabed import contact_load, in_contact
 
 
 @jit
-def bag_motion(bags, q, v, z, zd):
+def bag_motion(plant, q, v, z, zd):
     """Heights [m] and vertical speeds [m/s] of the bag points (retained modes), into z, zd."""
+    bags = plant.bags
     matvec(bags.shape, q, z)
     matvec(bags.shape, v, zd)
 
 
 @jit
-def bag_gas(bags, n, z, p, V):
+def bag_gas(plant, n, z, p, V):
     """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V."""
+    bags = plant.bags
     for i in range(n.size):
         p[i] = ambient_pressure(z[i], bags.water_depth, bags.p_atm, bags.rho_g)
         V[i] = gas_volume(n[i], p[i], bags.RT, bags.capacity[i])
 
 
 @jit
-def bag_forces(bags, V, zd, attached, current, point):
+def bag_forces(plant, V, zd, attached, current, point):
     """Force of every bag on the structure [N], into ``point``: buoyancy minus the bag's drag
     on its speed relative to the ``current`` [m/s], nothing once its sling is broken."""
+    bags = plant.bags
     for i in range(V.size):
         point[i] = (buoyancy(V[i], bags.rho_g) + drag(zd[i] - current, bags.drag[i])) * attached[i]
 
 
 @jit
-def strip_loads(strips, q, v, H, sep, current, noise, w, wv, line, contact, active):
+def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, active):
     """Strip motion (w [m], wv [m/s]), the explicit line loads (drag, noise, released
     suction) and the contact line loads [N/m], and which strips are in contact (``active``:
     their springs go into the implicit step). Returns the lowest strip height [m]."""
+    strips = plant.strips
     matvec(strips.shape, q, w)
     matvec(strips.shape, v, wv)
     w_min = np.inf
@@ -81,29 +89,30 @@ def generalised_force(plant, line, point, b):
 
 
 @jit
-def contact_matrices(strips, active, stiff, damp):
+def contact_matrices(plant, active, stiff, damp):
     """Modal stiffness and damping [per modal coordinate] of the strips in contact."""
     stiff[:] = 0.0
     damp[:] = 0.0
     for s in range(active.size):
         if active[s]:
-            _add_springs(strips, s, 1.0, stiff, damp)
+            _add_springs(plant, s, 1.0, stiff, damp)
 
 
 @jit
-def update_contact_matrices(strips, active, last, stiff, damp):
+def update_contact_matrices(plant, active, last, stiff, damp):
     """:func:`contact_matrices` for the pattern ``active`` from those of the pattern ``last``:
     the springs of the strips whose contact changed added or taken away (a moving touchdown
     changes a few strips at a time; rebuilding all of them was most of a staged lift's time)."""
     for s in range(active.size):
         if active[s] != last[s]:
             sign = 1.0 if active[s] else -1.0
-            _add_springs(strips, s, sign, stiff, damp)
+            _add_springs(plant, s, sign, stiff, damp)
 
 
 @jit
-def _add_springs(strips, s, sign, stiff, damp):
+def _add_springs(plant, s, sign, stiff, damp):
     """Add ``sign`` times strip ``s``'s contact spring and damper to the modal matrices."""
+    strips = plant.strips
     nr = stiff.shape[0]
     for i in range(nr):
         fi = strips.force[i, s] * sign
@@ -116,8 +125,9 @@ def _add_springs(strips, s, sign, stiff, damp):
 
 
 @jit
-def implicit_matrix(modal, h, stiff, damp, out):
+def implicit_matrix(plant, h, stiff, damp, out):
     """Inverse of I + h^2/4 K + h/2 C for a step of ``h`` [s], into ``out``."""
+    modal = plant.modal
     nr = modal.nr
     M = np.empty((nr, nr))
     for i in range(nr):
@@ -128,9 +138,10 @@ def implicit_matrix(modal, h, stiff, damp, out):
 
 
 @jit
-def trapezoidal_step(modal, q, v, b_mid, h, implicit, stiff, damp, work):
+def trapezoidal_step(plant, q, v, b_mid, h, implicit, stiff, damp, work):
     """Advance q, q' by ``h`` [s] in place (trapezoidal rule, contact springs implicit, the
     other forces ``b_mid`` taken at mid-step); ``work`` (nr,) scratch."""
+    modal = plant.modal
     nr = modal.nr
     for i in range(nr):  # work = h (b - K q - C v) - h^2/2 K v
         s = b_mid[i] - modal.omega2[i] * q[i] - modal.damping[i] * v[i]
