@@ -175,8 +175,8 @@ def run(quick: bool = False) -> dict:
     P = coupled_plant(sc)
     run_ = Ascent(sc, P, "coordinated", sc.simulation.duration_s, "table")
     t0 = time.perf_counter()
-    kernel.advance(run_.A, run_.C, run_.S, run_.R, run_.W, run_.X, run_.rec, run_.X.n_steps + 1)
-    steps = int(run_.R.counters[0])
+    kernel.advance(run_.inputs(), run_.settings.n_steps + 1)
+    steps = int(run_.state.counters[0])
     out["kernel_steps"] = steps
     out["kernel_us_per_step"] = round((time.perf_counter() - t0) / steps * 1e6, 2)
     base = None if quick else _baseline_in_this_run()

@@ -70,8 +70,8 @@ def test_breakout_pull_then_a_neutral_supervisor(tanker, plant):
         extra = S.V_d - Vn
         assert extra.sum() == pytest.approx(pull, rel=1e-9)
         if shaped:
-            xs, a = plant.strip_x, plant.arrays
-            hold = float(np.sum(a.strip_weight * a.strip_hold * xs))
+            xs, strips = plant.strip_x, plant.strips
+            hold = float(np.sum(strips.weight * strips.hold * xs))
             assert float(extra @ C.x) / pull == pytest.approx(hold, rel=1e-6)
             assert np.ptp(extra) > 1.0  # not equal shares: the tanker's hold is not centred
         else:

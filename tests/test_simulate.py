@@ -178,10 +178,10 @@ def test_numerics_failure_keeps_partial_results(quick, monkeypatch):
 
     real = loop.kernel.advance
 
-    def corrupting(A, C, S, R, W, X, rec, k_stop):
-        if R.counters[0] * X.dt > 50.0:
-            R.q[:] = np.nan
-        return real(A, C, S, R, W, X, rec, k_stop)
+    def corrupting(loop, k_stop):
+        if loop.state.counters[0] * loop.settings.dt > 50.0:
+            loop.state.q[:] = np.nan
+        return real(loop, k_stop)
 
     monkeypatch.setattr(loop, "CHUNK_STEPS", 100)
     monkeypatch.setattr(loop.kernel, "advance", corrupting)

@@ -65,29 +65,28 @@ def test_an_internal_bag_in_a_sequence_is_refused(tanker):
 # ------------------------------------------------------------------------- the plant
 def test_each_stage_has_its_stretch_its_suction_and_its_weight(line):
     P = coupled_plant(line)
-    a = P.arrays
-    assert a.ng == 10
-    assert np.all(np.diff(a.strip_group) >= 0)  # contiguous stretches from KP 0
-    assert a.H0.sum() == pytest.approx((line.lift.breakout_factor - 1) * P.wet_weight, rel=1e-12)
-    assert a.group_weight.sum() == pytest.approx(P.wet_weight, rel=1e-12)
-    assert a.H0 == pytest.approx(np.full(10, a.H0.sum() / 10), rel=1e-9)  # a uniform line
+    assert P.seabed.ng == 10
+    assert np.all(np.diff(P.strips.group) >= 0)  # contiguous stretches from KP 0
+    assert P.seabed.H0.sum() == pytest.approx((line.lift.breakout_factor - 1) * P.wet_weight, rel=1e-12)
+    assert P.seabed.group_weight.sum() == pytest.approx(P.wet_weight, rel=1e-12)
+    assert P.seabed.H0 == pytest.approx(np.full(10, P.seabed.H0.sum() / 10), rel=1e-9)  # a uniform line
     # each stretch's bags hold its weight at the start: the line rests neutral stage by stage
-    lift = np.bincount(a.bag_group, P.neutral_volume * a.rho_g, a.ng)
-    assert lift == pytest.approx(a.group_weight, rel=1e-12)
+    lift = np.bincount(P.bags.group, P.neutral_volume * P.bags.rho_g, P.seabed.ng)
+    assert lift == pytest.approx(P.seabed.group_weight, rel=1e-12)
     # the hold per unit H of its group integrates to 1 over each stretch
-    per = np.bincount(a.strip_group, a.strip_weight * a.strip_hold, a.ng)
+    per = np.bincount(P.strips.group, P.strips.weight * P.strips.hold, P.seabed.ng)
     assert per == pytest.approx(np.ones(10), rel=1e-12)
 
 
 def test_no_sequence_is_one_group(tanker):
-    a = coupled_plant(tanker).arrays
-    assert a.ng == 1 and not a.strip_group.any() and not a.bag_group.any()
+    a = coupled_plant(tanker)
+    assert a.seabed.ng == 1 and not a.strips.group.any() and not a.bags.group.any()
 
 
 def test_retained_modes_auto_resolves_the_lift_point_spacing(line, tanker):
     P = coupled_plant(line)
     assert retained_flexible(line, P.hull, P.plan) == 40  # 1 km / 25 m
-    assert P.arrays.nr == 42
+    assert P.modal.nr == 42
     assert retained_flexible(tanker, None, None) == 3  # a number is kept
     few = line.with_changes(**{"pipe.lift_points": {"spacing_m": 400.0}})
     Pf = coupled_plant(few)
@@ -95,16 +94,16 @@ def test_retained_modes_auto_resolves_the_lift_point_spacing(line, tanker):
 
 
 def test_contact_springs_updated_strip_by_strip_equal_a_rebuild(line):
-    a = coupled_plant(line.with_changes(**{"pipe.elements": 100})).arrays
+    a = coupled_plant(line.with_changes(**{"pipe.elements": 100}))
     rng = np.random.default_rng(1)
-    last = rng.random(a.ns) < 0.5
-    stiff, damp = np.zeros((a.nr, a.nr)), np.zeros((a.nr, a.nr))
-    contact_matrices(a, last, stiff, damp)
+    last = rng.random(a.strips.ns) < 0.5
+    stiff, damp = np.zeros((a.modal.nr, a.modal.nr)), np.zeros((a.modal.nr, a.modal.nr))
+    contact_matrices(a.records, last, stiff, damp)
     for _ in range(20):
-        now = last ^ (rng.random(a.ns) < 0.05)
-        update_contact_matrices(a, now, last, stiff, damp)
+        now = last ^ (rng.random(a.strips.ns) < 0.05)
+        update_contact_matrices(a.records, now, last, stiff, damp)
         K, C = np.zeros_like(stiff), np.zeros_like(damp)
-        contact_matrices(a, now, K, C)
+        contact_matrices(a.records, now, K, C)
         assert np.abs(stiff - K).max() <= 1e-9 * np.abs(K).max()
         assert np.abs(damp - C).max() <= 1e-9 * np.abs(C).max()
         last = now
@@ -157,7 +156,7 @@ def test_the_builtin_pipeline_is_peeled_off_stage_by_stage(line_runs, mode):
     assert all(r.criteria.values()), r.reasons
     ds = r.dataset
     P = coupled_plant(load_scenario("pipeline"))
-    stage = P.arrays.bag_group
+    stage = P.bags.group
     arrival = ds.arrival_time.values
     by_stage = [np.median(arrival[stage == k]) for k in range(10)]
     assert np.all(np.diff(by_stage) > 15.0)  # the stages arrive in turn, ~30 s apart

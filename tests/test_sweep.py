@@ -108,9 +108,10 @@ def test_reused_plants_are_the_plants_a_fresh_build_gives(tanker):
     from flexlift.sweep import plants
 
     def same(a, b):
-        for f in a.arrays._fields:
-            assert np.array_equal(np.asarray(getattr(a.arrays, f)),
-                                  np.asarray(getattr(b.arrays, f))), f
+        for name, record in a.records._asdict().items():
+            for f in record._fields:
+                assert np.array_equal(np.asarray(getattr(record, f)),
+                                      np.asarray(getattr(getattr(b, name), f))), (name, f)
 
     before = plants.stats()["plants"]["hits"]
     for change in ({}, {"disturbance.current_m_s": 0.05}, {"control.breakout_pull_t": 120},
@@ -318,10 +319,10 @@ def test_numerics_failing_in_one_case_is_recorded_and_the_sweep_goes_on(tmp_path
 
     real = loop.kernel.advance  # (in this process: --workers 1)
 
-    def corrupting(A, C, S, R, W, X, rec, k_stop):  # the numerics blow up when the current runs
-        if W.current[0] > 0 and R.counters[0] * X.dt > 50.0:
-            R.q[:] = np.nan
-        return real(A, C, S, R, W, X, rec, k_stop)
+    def corrupting(loop, k_stop):  # the numerics blow up when the current runs
+        if loop.switches.current[0] > 0 and loop.state.counters[0] * loop.settings.dt > 50.0:
+            loop.state.q[:] = np.nan
+        return real(loop, k_stop)
 
     monkeypatch.setattr(loop.kernel, "advance", corrupting)
     spec = parse_spec(grid({"disturbance.current_m_s": [0.0, 0.01, 0.0]},

@@ -6,14 +6,18 @@ reference count per array it holds, about 3 ns each: with ~40 arrays a tuple and
 step that was 5 µs of a 6 µs step (measured). :func:`as_struct` wraps a named tuple once, at
 the entry of the compiled loop, into a mutable struct (numba ``StructRef``) holding the *same*
 arrays (no copy; writes go to the tuple's arrays); a struct is passed as one pointer.
+
+Only numba's public StructRef API is used: ``structref.register`` for the type and its
+attributes, ``structref.new`` to allocate one (as numba's own ``define_constructor`` does; it
+frees the struct and releases its arrays). tests/test_struct.py checks the sharing and that no
+reference is leaked.
 """
 
 from __future__ import annotations
 
-from numba.core import cgutils, types
+from numba.core import types
 from numba.experimental import structref
-from numba.experimental.jitclass.base import imp_dtor
-from numba.extending import intrinsic
+from numba.extending import overload
 
 __all__ = ["Struct", "as_struct"]
 
@@ -26,31 +30,28 @@ class Struct(types.StructRef):
         return tuple((name, types.unliteral(typ)) for name, typ in fields)
 
 
-@intrinsic
-def as_struct(typingctx, tup):
+def as_struct(tup):
     """``as_struct(t)`` in compiled code: a :class:`Struct` with the fields of the named
-    tuple ``t``, referring to the same arrays (their reference counts taken once)."""
+    tuple ``t``, referring to the same arrays (their reference counts taken once); a named
+    tuple inside ``t`` becomes a struct inside it (``plant.bags.capacity``)."""
+    raise TypeError("as_struct is for compiled code only")
+
+
+def _struct_type(tup):
+    """The :class:`Struct` type of a named tuple type (named tuples in it become structs)."""
+    return Struct([(name, _struct_type(typ) if isinstance(typ, types.BaseNamedTuple) else typ)
+                   for name, typ in zip(tup.fields, tup.types)])
+
+
+@overload(as_struct)
+def _as_struct(tup):
     if not isinstance(tup, types.BaseNamedTuple):
         return None
-    st_type = Struct(list(zip(tup.fields, tup.types)))
-
-    def codegen(context, builder, sig, args):
-        [val] = args
-        model = context.data_model_manager[st_type.get_data_type()]
-        alloc_type = model.get_value_type()
-        size = context.get_abi_sizeof(alloc_type)
-        meminfo = context.nrt.meminfo_alloc_dtor(
-            builder, context.get_constant(types.uintp, size),
-            imp_dtor(context, builder.module, st_type))
-        ptr = builder.bitcast(context.nrt.meminfo_data(builder, meminfo), alloc_type.as_pointer())
-        builder.store(cgutils.get_null_value(alloc_type), ptr)
-        inst = context.make_helper(builder, st_type)
-        inst.meminfo = meminfo
-        data = cgutils.create_struct_proxy(st_type.get_data_type())(context, builder, ref=ptr)
-        for i, (name, ty) in enumerate(zip(tup.fields, tup.types)):
-            value = builder.extract_value(val, i)
-            context.nrt.incref(builder, ty, value)
-            setattr(data, name, value)
-        return inst._getvalue()
-
-    return st_type(tup), codegen
+    st_type = _struct_type(tup)
+    lines = "".join(f"    st.{name} = as_struct(tup.{name})\n"
+                    if isinstance(typ, types.BaseNamedTuple) else f"    st.{name} = tup.{name}\n"
+                    for name, typ in zip(tup.fields, tup.types))
+    source = f"def impl(tup):\n    st = new(st_type)\n{lines}    return st\n"
+    glbs = {"new": structref.new, "st_type": st_type, "as_struct": as_struct}
+    exec(source, glbs)  # a constructor for these fields, as structref.define_constructor does
+    return glbs["impl"]

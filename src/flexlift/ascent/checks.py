@@ -58,7 +58,7 @@ def refuse_unworkable(scenario, plant) -> None:
         raise InputError("lift.internal_bags", scenario.lift.internal_bags,
                          f"all {plant.external.size} bags are internal: none is left to pull the "
                          "hull off the seabed and control the ascent; use fewer internal bags")
-    top = float(plant.arrays.top_offset.max())
+    top = float(plant.bags.top_offset.max())
     highest = env.water_depth_m - lim.surface_clearance_m - top
     if c.target_height_m >= highest:
         raise InputError(
@@ -66,7 +66,7 @@ def refuse_unworkable(scenario, plant) -> None:
             f"the bags' tops ({top:.1f} m above the hull bottom) reach the surface when the hull "
             f"is {highest:.1f} m above the seabed in {env.water_depth_m:g} m of water; choose a "
             f"target below {highest:.1f} m")
-    H0 = float(plant.arrays.H0.sum())
+    H0 = float(plant.seabed.H0.sum())
     if H0 > 0 and breakout_pull(scenario, H0) <= 0:
         raise InputError("control.breakout_pull_t", c.breakout_pull_t,
                          f"with no pull the hull never separates from its {_t(H0, plant.gravity):.0f} t "
@@ -99,7 +99,7 @@ def sequence_check(scenario, plant) -> Check:
     q = plant.wet_weight / hull.length
     EI = float(np.median(hull.EI))
     peel = suspended_length(EI, q, max(lead, 1e-9))
-    stretch = hull.length / max(plant.arrays.ng, 1)
+    stretch = hull.length / max(plant.seabed.ng, 1)
     ok = bool(peel <= stretch)
     msg = (f"a stage {lead:.2f} m ahead of the next (its {c.sequence.delay_s:g} s start) bends the "
            f"structure over ~{peel:,.0f} m (l = (24 EI h / q)^1/4), "
@@ -140,19 +140,18 @@ def balance_check(plant) -> Check:
 def _separations(scenario, plant):
     """The breakout pull of each external bag and what the fill holds of it [m^3], and each
     stage's separation time and fill time [s] (SPEC §6: the bags of a stage fill at once)."""
-    a = plant.arrays
     ext = np.flatnonzero(plant.external)
     V_pull = bag_pulls(scenario, plant)
     held = np.maximum(V_pull - scenario.control.volume_deadband_m3, 0.0)
     start = start_times(scenario, plant.names, plant.x_point, plant.external)[ext]
     q_in, T_b = scenario.gas.fill_rate_max_m3_s, scenario.seabed.breakout_time_s
     times, fills = [], []
-    for k in range(a.ng):
-        mine = a.bag_group[ext] == k
+    for k in range(plant.seabed.ng):
+        mine = plant.bags.group[ext] == k
         fill = float(held[mine].sum()) / max(mine.sum() * q_in, 1e-12)
         fills.append(fill)
         times.append(float(start[mine].max(initial=0.0)) + fill + seabed.separation_time(
-            float(held[mine].sum()) * a.rho_g, float(a.H0[k]), T_b))
+            float(held[mine].sum()) * plant.bags.rho_g, float(plant.seabed.H0[k]), T_b))
     return V_pull, held, times, fills
 
 
@@ -163,7 +162,7 @@ def duration_check(scenario, plant) -> Check:
     from flexlift.ascent.outcome import remaining_ascent_s
 
     sim = scenario.simulation
-    t_sep = max(_separations(scenario, plant)[2]) if float(plant.arrays.H0.sum()) > 0 else 0.0
+    t_sep = max(_separations(scenario, plant)[2]) if float(plant.seabed.H0.sum()) > 0 else 0.0
     rise = remaining_ascent_s(scenario, plant, 0.0)
     need = t_sep + rise + sim.hold_time_s
     if not math.isfinite(need):
@@ -199,8 +198,8 @@ def breakout_check(scenario, plant) -> Check:
     stops within the volume deadband of its target, so each bag holds its pull less the
     deadband. A staged lift: each stage's stretch separates under its own bags' pull from
     their start; the last to let go decides."""
-    a, g = plant.arrays, plant.gravity
-    H0 = float(a.H0.sum())
+    g = plant.gravity
+    H0 = float(plant.seabed.H0.sum())
     if H0 <= 0:
         return Check("breakout", True, "no suction (breakout factor 1): the hull lifts as soon as it is light")
     V_pull, held, times, fills = _separations(scenario, plant)
@@ -208,22 +207,22 @@ def breakout_check(scenario, plant) -> Check:
     last = int(np.argmax(times))
     duration = scenario.simulation.run_length_s
     ok = bool(times[last] < 0.8 * duration)
-    pull = float(V_pull.sum()) * a.rho_g
-    lost = pull - float(held.sum()) * a.rho_g
+    pull = float(V_pull.sum()) * plant.bags.rho_g
+    lost = pull - float(held.sum()) * plant.bags.rho_g
     verdict = f"{'within' if ok else 'too close to or beyond'} the {duration:,.0f} s run"
-    if a.ng == 1:
+    if plant.seabed.ng == 1:
         msg = (f"a pull of {_t(pull, g):.0f} t breaks the {_t(H0, g):.0f} t hold in "
                f"~{times[0]:,.0f} s ({fills[0]:.0f} s of it filling the pull), {verdict}")
     else:
-        msg = (f"a staged lift in {a.ng} stages: each stretch separates under its own bags' "
+        msg = (f"a staged lift in {plant.seabed.ng} stages: each stretch separates under its own bags' "
                f"pull ({_t(pull, g):.0f} t in all), the first at ~{times[0]:,.0f} s, the last "
-               f"(stage {last + 1}, {_t(float(a.H0[last]), g):.1f} t of suction) at "
+               f"(stage {last + 1}, {_t(float(plant.seabed.H0[last]), g):.1f} t of suction) at "
                f"~{times[last]:,.0f} s, {verdict}")
     if lost > 0.1 * pull:
         msg += (f"; the fill stops {scenario.control.volume_deadband_m3:g} m3 short of each bag's "
                 f"target (control.volume_deadband_m3), {_t(lost, g):.1f} t of the pull: lower it "
                 "for small bags")
-    if not ok and a.ng == 1:
+    if not ok and plant.seabed.ng == 1:
         need = H0 / (1.0 + max(0.8 * duration - fills[0], 1.0) / T_b)
         msg += (f"; raise control.breakout_pull_t to at least {_t(need, g):.0f} t or "
                 "simulation.duration_s")
@@ -235,13 +234,13 @@ def breakout_check(scenario, plant) -> Check:
 
 def purge_check(scenario, plant) -> Check:
     """From which height up the planned speed cannot be held by purging."""
-    a, c = plant.arrays, scenario.control
+    c = scenario.control
     ext = np.flatnonzero(plant.external)
     if not ext.size:
         return Check("purge_capacity", True, "no external bags: nothing to purge")
     z = np.linspace(0.0, c.target_height_m, 2001)
-    lim = np.min([speed_limit(z, plant.neutral_volume[i], a.capacity[i], a.purge_max,
-                              c.purge_margin, a.water_depth, a.p_atm, a.rho_g) for i in ext], axis=0)
+    lim = np.min([speed_limit(z, plant.neutral_volume[i], plant.bags.capacity[i], plant.bags.purge_max,
+                              c.purge_margin, plant.bags.water_depth, plant.bags.p_atm, plant.bags.rho_g) for i in ext], axis=0)
     slow = lim < c.ascent_speed_m_s
     if not slow.any():
         return Check("purge_capacity", True,
@@ -250,7 +249,7 @@ def purge_check(scenario, plant) -> Check:
                      f"(at least {lim.min():.2f} m/s with margin {c.purge_margin:g})")
     z0 = float(z[slow][0])
     return Check("purge_capacity", False,
-                 f"from {z0:.1f} m above the seabed ({a.water_depth - z0:.1f} m deep) up, the gas "
+                 f"from {z0:.1f} m above the seabed ({plant.bags.water_depth - z0:.1f} m deep) up, the gas "
                  f"expands faster than {c.purge_margin:g} of the purge capacity at the planned "
                  f"{c.ascent_speed_m_s:g} m/s: the planned ascent slows to {lim[slow].min():.3f} m/s "
                  "there (larger purge valves, gas.purge_rate_max_m3_s, would keep the speed)")
@@ -258,11 +257,10 @@ def purge_check(scenario, plant) -> Check:
 
 def fill_check(scenario, plant) -> Check:
     """How long the supply takes to fill the breakout pull."""
-    a = plant.arrays
     n_ext = int(plant.external.sum())
     if not n_ext:
         return Check("fill", True, "no external bags: nothing is filled during the run")
-    pull = breakout_pull(scenario, float(a.H0.sum())) / a.rho_g  # [m^3] at local pressure
+    pull = breakout_pull(scenario, float(plant.seabed.H0.sum())) / plant.bags.rho_g  # [m^3] at local pressure
     t_fill = pull / max(n_ext * scenario.gas.fill_rate_max_m3_s, 1e-12)
     V_n = plant.neutral_volume[plant.external]
     t_first = float(V_n.max()) / scenario.gas.fill_rate_max_m3_s

@@ -17,6 +17,41 @@ Each step k (t = k dt), in order:
    by the next control sample, breakout.
 
 Faults and noise chunks are set between calls by :mod:`flexlift.ascent.loop`.
+
+**Inputs.** :func:`advance` takes one :class:`~flexlift.ascent.records.LoopInputs` and turns
+each of its records into a struct passed by reference (:func:`flexlift._struct.as_struct`):
+``plant`` (read only: ``plant.modal``, ``plant.strips``, ``plant.bags``, ``plant.seabed``,
+:mod:`flexlift.ascent.records`), ``controllers`` and ``control_state`` (the controllers'
+constants and memory, :mod:`flexlift.control.controller`), ``state``, ``switches``,
+``settings`` and ``recorder`` (:mod:`flexlift.ascent.state`). Every function here takes, by
+these names, the records it reads (the laws of :mod:`flexlift.ascent.mechanics` the plant, and
+the state's arrays they work on); the plant's parts are read through it (``plant.bags``).
+
+**Extending the loop** means adding fields and a branch in the function of the law, never a
+positional argument:
+
+- *a bag type*: its constants as fields of :class:`~flexlift.ascent.records.Bags` (arrays
+  over the bags, with a kind code if the law differs), filled by
+  :func:`flexlift.ascent.plant.bag_record` and :func:`flexlift.ascent.paper.paper_plant`;
+  the branch on it in the law it changes (``bag_gas``, ``bag_forces`` in mechanics.py,
+  ``_gas_step`` here for the gas over a step);
+- *a fault*: its switch as a field of :class:`~flexlift.ascent.state.Switches`
+  (:func:`~flexlift.ascent.state.new_switches`), set by its branch of
+  :func:`flexlift.ascent.faults.apply_fault`, read where it acts (as ``_gas_step`` reads
+  ``switches.leak``);
+- *a controller*: its constants in :class:`~flexlift.control.controller.ControlArrays`
+  (built in :mod:`flexlift.control.build`), its memory in
+  :class:`~flexlift.control.controller.ControlState`, its law a function of
+  control/controller.py chosen on ``controllers.mode`` in ``observe``/``act``;
+- *a loop option*: a field of :class:`~flexlift.ascent.state.Settings` (set in
+  :class:`flexlift.ascent.loop.Ascent`), read where it applies;
+- *a new kind of record*: a field of ``LoopInputs``, its struct in ``_structs``, and a
+  parameter of only the functions that read it (each struct a function takes costs a
+  reference count per call, as does a struct read out of another and passed on: a new part
+  of the plant is a field of ``PlantRecords``, read as ``plant.part``, not an argument).
+
+Renaming or removing a record's class leaves numba's on-disk cache index naming the old
+class: delete the ``*.nbi``/``*.nbc`` files of ``__pycache__`` after such a change.
 """
 
 from __future__ import annotations
@@ -79,408 +114,433 @@ from flexlift.physics.seabed import COMPLETE_FRACTION, holding_rate, released_ho
 
 
 @jit
-def advance(A, C, S, R, W, X, rec, k_stop):
+def advance(loop, k_stop):
     """Run steps until step ``k_stop`` (exclusive), the end, or a stop; returns why
-    (``RET_DONE``: reached k_stop or the last step, ``RET_STOP``, ``RET_NEED_U``). The
-    arguments are the named tuples of :mod:`flexlift.ascent.state`, the plant's and the
-    controller's arrays; inside, they are passed by reference (:func:`flexlift._struct.
-    as_struct`)."""
-    return _advance(as_struct(A), as_struct(C), as_struct(S), as_struct(R), as_struct(W),
-                    as_struct(X), as_struct(rec), k_stop)
+    (``RET_DONE``: reached k_stop or the last step, ``RET_STOP``, ``RET_NEED_U``). ``loop``
+    is a :class:`~flexlift.ascent.records.LoopInputs`; inside, its records are passed by
+    reference (:func:`flexlift._struct.as_struct`)."""
+    return _advance(*_structs(loop), k_stop)
 
 
 @jit
-def initial_equilibrium(A, R, W):
-    """The loads of the state in ``R`` (named tuples), and the modal coordinates at rest on
-    the held seabed springs under them (least squares: the paper's bag models have a mode
-    that their one spring does not hold)."""
-    A, R, W = as_struct(A), as_struct(R), as_struct(W)
-    bag_motion(A, R.q, R.v, R.z, R.zd)
-    bag_gas(A, R.n, R.z, R.p, R.V)
-    _loads_at_state(A, R, W, W.noise[0])
-    contact_matrices(A, R.active, R.stiff, R.damp)
-    K = R.stiff.copy()
-    for i in range(A.nr):
-        K[i, i] += A.omega2[i]
-    R.q[:] = np.linalg.lstsq(K, R.b)[0]
+def _structs(loop):
+    """The records of ``loop`` as structs, in the order of :class:`LoopInputs`."""
+    return (as_struct(loop.plant), as_struct(loop.controllers), as_struct(loop.control_state),
+            as_struct(loop.state), as_struct(loop.switches), as_struct(loop.settings),
+            as_struct(loop.recorder))
 
 
 @jit
-def final_row(t, A, C, S, R, W, rec):
-    """A recorded row of the current state (named tuples), at the end of a run."""
-    store_row(t, as_struct(A), as_struct(C), as_struct(S), as_struct(R), as_struct(W),
-              as_struct(rec))
+def initial_equilibrium(loop):
+    """The loads of the state in ``loop.state`` (:class:`LoopInputs`), and the modal
+    coordinates at rest on the held seabed springs under them (least squares: the paper's
+    bag models have a mode that their one spring does not hold)."""
+    plant, controllers, control_state, state, switches, settings, recorder = _structs(loop)
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
+    bag_gas(plant, state.n, state.z, state.p, state.V)
+    _loads_at_state(plant, state, switches, switches.noise[0])
+    contact_matrices(plant, state.active, state.stiff, state.damp)
+    K = state.stiff.copy()
+    for i in range(plant.modal.nr):
+        K[i, i] += plant.modal.omega2[i]
+    state.q[:] = np.linalg.lstsq(K, state.b)[0]
 
 
 @jit
-def _advance(A, C, S, R, W, X, rec, k_stop):
-    while R.counters[0] < k_stop:
-        code = step(A, C, S, R, W, X, rec)
+def final_row(t, loop):
+    """A recorded row of the current state (:class:`LoopInputs`), at the end of a run."""
+    plant, controllers, control_state, state, switches, settings, recorder = _structs(loop)
+    store_row(t, plant, controllers, control_state, state, switches, recorder)
+
+
+@jit
+def _advance(plant, controllers, control_state, state, switches, settings, recorder, k_stop):
+    while state.counters[0] < k_stop:
+        code = step(plant, controllers, control_state, state, switches, settings, recorder)
         if code != RET_DONE:
             return code
-        if R.counters[0] > X.n_steps:
+        if state.counters[0] > settings.n_steps:
             return RET_DONE
     return RET_DONE
 
 
 @jit
-def step(A, C, S, R, W, X, rec):
+def step(plant, controllers, control_state, state, switches, settings, recorder):
     """One time step (module docstring); returns RET_DONE to go on."""
-    k = R.counters[0]
-    t = k * X.dt
-    if not R.counters[1] & F_FRESH:  # the bags' motion and gas of this state, once
-        bag_motion(A, R.q, R.v, R.z, R.zd)
-        bag_gas(A, R.n, R.z, R.p, R.V)
-        R.counters[1] |= F_FRESH
-    if k % X.k_ctrl == 0 and control(t, k, A, C, S, R, W, X) == RET_NEED_U:
+    k = state.counters[0]
+    t = k * settings.dt
+    if not state.counters[1] & F_FRESH:  # the bags' motion and gas of this state, once
+        bag_motion(plant, state.q, state.v, state.z, state.zd)
+        bag_gas(plant, state.n, state.z, state.p, state.V)
+        state.counters[1] |= F_FRESH
+    if k % settings.k_ctrl == 0 and control(t, k, plant, controllers, control_state, state,
+                                            switches, settings) == RET_NEED_U:
         return RET_NEED_U
-    noise = W.noise[k - W.chunk[0]] if W.chunk[0] >= 0 else W.noise[0]
-    cur = W.current[0]
-    bag_forces(A, R.V, R.zd, W.attached, cur, R.point)
-    w_min = strip_loads(A, R.q, R.v, R.H, R.sep, cur, noise, R.w, R.wv, R.line, R.contact,
-                        R.active)
-    generalised_force(A, R.line, R.point, R.b)
-    if k % X.k_out == 0:
-        store_row(t, A, C, S, R, W, rec)
-    if k % X.k_str == 0:
-        store_snapshot(t, A, R, W, noise, rec)
-    if events(t, A, R, W, X, rec, w_min) != RET_DONE:
+    noise = switches.noise[k - switches.chunk[0]] if switches.chunk[0] >= 0 else switches.noise[0]
+    cur = switches.current[0]
+    bag_forces(plant, state.V, state.zd, switches.attached, cur, state.point)
+    w_min = strip_loads(plant, state.q, state.v, state.H, state.sep, cur, noise, state.w,
+                        state.wv, state.line, state.contact, state.active)
+    generalised_force(plant, state.line, state.point, state.b)
+    if k % settings.k_out == 0:
+        store_row(t, plant, controllers, control_state, state, switches, recorder)
+    if k % settings.k_str == 0:
+        store_snapshot(t, plant, state, switches, noise, recorder)
+    if events(t, plant, state, switches, settings, recorder, w_min) != RET_DONE:
         return RET_STOP
-    if k == X.n_steps:
-        R.counters[0] = k + 1
+    if k == settings.n_steps:
+        state.counters[0] = k + 1
         return RET_STOP
-    rates(A, R, W, X)
-    R.z_prev[:] = R.z
-    R.work[4] = R.q
-    R.work[5] = R.v
-    mechanics(A, R, W, X, w_min, noise)
-    finish_step(t, A, R, W, X, rec, noise)
-    R.counters[0] = k + 1
-    if k % 100 == 0 and not healthy(R):
-        log_event(rec, t + X.dt, EV_NUMERICS, -1, 0.0)
+    rates(plant, state, switches)
+    state.z_prev[:] = state.z
+    state.work[4] = state.q
+    state.work[5] = state.v
+    mechanics(plant, state, switches, settings, w_min, noise)
+    finish_step(t, plant, state, switches, settings, recorder, noise)
+    state.counters[0] = k + 1
+    if k % 100 == 0 and not healthy(state):
+        log_event(recorder, t + settings.dt, EV_NUMERICS, -1, 0.0)
         return RET_STOP
     return RET_DONE
 
 
 @jit
-def control(t, k, A, C, S, R, W, X):
+def control(t, k, plant, controllers, control_state, state, switches, settings):
     """A control sample: measure, observe, supervise, act; RET_NEED_U when the supervisor is
-    evaluated outside (its inputs are then in S.e_in, S.r_in; call again with S.u set)."""
-    if not R.counters[1] & F_OBSERVED:
-        measure(t, k, A, R, W, X)
-        for j in range(C.bags.size):
-            i = C.bags[j]
-            S.in_z[j], S.in_zd[j], S.in_sep[j] = R.meas[0, i], R.meas[1, i], R.sep[A.bag_group[i]]
-        observe(t, S.in_z, S.in_zd, S.in_sep, C, S)
-        if X.external:
-            R.counters[1] |= F_OBSERVED
+    evaluated outside (its inputs are then in ``control_state.e_in``, ``.r_in``; call again
+    with ``control_state.u`` set)."""
+    if not state.counters[1] & F_OBSERVED:
+        measure(t, k, plant, state, switches, settings)
+        for j in range(controllers.bags.size):
+            i = controllers.bags[j]
+            control_state.in_z[j], control_state.in_zd[j] = state.meas[0, i], state.meas[1, i]
+            control_state.in_sep[j] = state.sep[plant.bags.group[i]]
+        observe(t, control_state.in_z, control_state.in_zd, control_state.in_sep, controllers,
+                control_state)
+        if settings.external:
+            state.counters[1] |= F_OBSERVED
             return RET_NEED_U
-        supervise(C, S)
-    R.counters[1] &= ~F_OBSERVED
-    for j in range(C.bags.size):
-        S.in_V[j] = R.meas[2, C.bags[j]]
-    act(S.in_V, C, S)
-    for j in range(C.bags.size):
-        R.fill[C.bags[j]], R.opening[C.bags[j]] = S.fill[j], S.opening[j]
+        supervise(controllers, control_state)
+    state.counters[1] &= ~F_OBSERVED
+    for j in range(controllers.bags.size):
+        control_state.in_V[j] = state.meas[2, controllers.bags[j]]
+    act(control_state.in_V, controllers, control_state)
+    for j in range(controllers.bags.size):
+        i = controllers.bags[j]
+        state.fill[i], state.opening[i] = control_state.fill[j], control_state.opening[j]
     return RET_DONE
 
 
 @jit
-def measure(t, k, A, R, W, X):
-    """What the sensors report, into R.meas (3, nb): height, speed and gas volume with drift,
+def measure(t, k, plant, state, switches, settings):
+    """What the sensors report, into state.meas (3, nb): height, speed and gas volume with drift,
     noise and stuck or dropped-out sensors (which repeat their last values)."""
-    j = k // X.k_ctrl - W.chunk[1]
-    noisy = W.chunk[1] >= 0
-    for i in range(A.nb):
-        zm = R.z[i] + W.drift[i] * max(t - W.drift_t0[i], 0.0)
-        zdm, Vm = R.zd[i], R.V[i]
+    j = k // settings.k_ctrl - switches.chunk[1]
+    noisy = switches.chunk[1] >= 0
+    for i in range(plant.bags.nb):
+        zm = state.z[i] + switches.drift[i] * max(t - switches.drift_t0[i], 0.0)
+        zdm, Vm = state.zd[i], state.V[i]
         if noisy:
-            zm += W.meas_noise[j, 0, i]
-            zdm += W.meas_noise[j, 1, i]
-            Vm += W.meas_noise[j, 2, i]
-        if W.frozen[i] and t >= W.frozen_until[i]:
-            W.frozen[i] = False
-        if W.frozen[i]:
-            zm, zdm, Vm = W.last[0, i], W.last[1, i], W.last[2, i]
-        W.last[0, i], W.last[1, i], W.last[2, i] = zm, zdm, Vm
-        R.meas[0, i], R.meas[1, i], R.meas[2, i] = zm, zdm, Vm
+            zm += switches.meas_noise[j, 0, i]
+            zdm += switches.meas_noise[j, 1, i]
+            Vm += switches.meas_noise[j, 2, i]
+        if switches.frozen[i] and t >= switches.frozen_until[i]:
+            switches.frozen[i] = False
+        if switches.frozen[i]:
+            zm, zdm, Vm = switches.last[0, i], switches.last[1, i], switches.last[2, i]
+        switches.last[0, i], switches.last[1, i], switches.last[2, i] = zm, zdm, Vm
+        state.meas[0, i], state.meas[1, i], state.meas[2, i] = zm, zdm, Vm
 
 
 @jit
-def events(t, A, R, W, X, rec, w_min):
+def events(t, plant, state, switches, settings, recorder, w_min):
     """The events of the current state; RET_STOP ends the run (a breach, the target held)."""
-    for i in range(A.nb):
-        if W.attached[i] > 0.0 and R.z[i] > X.top_limit[i]:
-            log_event(rec, t, EV_SURFACE_BREACH, i, R.z[i])
+    for i in range(plant.bags.nb):
+        if switches.attached[i] > 0.0 and state.z[i] > settings.top_limit[i]:
+            log_event(recorder, t, EV_SURFACE_BREACH, i, state.z[i])
             return RET_STOP
-    if not R.sep.any():
+    if not state.sep.any():
         return RET_DONE
-    limits(t, A, R, W, X, rec)
-    flags = R.counters[1]
-    if R.sep.all() and not flags & F_RESETTLE:
-        if not flags & F_LIFTOFF and w_min > A.liftoff_clearance:
-            R.counters[1] |= F_LIFTOFF
-            log_event(rec, t, EV_LIFTOFF, -1, w_min)
+    limits(t, plant, state, switches, settings, recorder)
+    flags = state.counters[1]
+    if state.sep.all() and not flags & F_RESETTLE:
+        if not flags & F_LIFTOFF and w_min > plant.seabed.liftoff_clearance:
+            state.counters[1] |= F_LIFTOFF
+            log_event(recorder, t, EV_LIFTOFF, -1, w_min)
         elif flags & F_LIFTOFF and w_min < 0.0:
-            R.counters[1] |= F_RESETTLE
-            log_event(rec, t, EV_RESETTLE, -1, w_min)
-    return arrivals(t, A, R, W, X, rec)
+            state.counters[1] |= F_RESETTLE
+            log_event(recorder, t, EV_RESETTLE, -1, w_min)
+    return arrivals(t, plant, state, switches, settings, recorder)
 
 
 @jit
-def limits(t, A, R, W, X, rec):
+def limits(t, plant, state, switches, settings, recorder):
     """Running maxima of the bags' upward and downward speeds and of the pitch, and their
     limit events (once each)."""
     up, down, i_up, i_down = 0.0, 0.0, -1, -1
-    for i in range(A.nb):
-        s = R.zd[i] * W.attached[i]
+    for i in range(plant.bags.nb):
+        s = state.zd[i] * switches.attached[i]
         if s > up:
             up, i_up = s, i
         elif -s > down:
             down, i_down = -s, i
-    if up > R.scalars[0]:
-        R.scalars[0] = up
-        if up > X.v_limit and not R.counters[1] & F_LIMIT_V:
-            R.counters[1] |= F_LIMIT_V
-            log_event(rec, t, EV_LIMIT_VELOCITY, i_up, up)
-    if down > R.scalars[4]:
-        R.scalars[4] = down
-        if down > X.v_down_limit and not R.counters[1] & F_LIMIT_D:
-            R.counters[1] |= F_LIMIT_D
-            log_event(rec, t, EV_LIMIT_DESCENT, i_down, down)
-    pitch = abs(math.atan(dot(A.pitch_row, R.q)))
-    if pitch > R.scalars[1]:
-        R.scalars[1] = pitch
-        if pitch > X.pitch_limit and not R.counters[1] & F_LIMIT_P:
-            R.counters[1] |= F_LIMIT_P
-            log_event(rec, t, EV_LIMIT_PITCH, -1, pitch)
+    if up > state.scalars[0]:
+        state.scalars[0] = up
+        if up > settings.v_limit and not state.counters[1] & F_LIMIT_V:
+            state.counters[1] |= F_LIMIT_V
+            log_event(recorder, t, EV_LIMIT_VELOCITY, i_up, up)
+    if down > state.scalars[4]:
+        state.scalars[4] = down
+        if down > settings.v_down_limit and not state.counters[1] & F_LIMIT_D:
+            state.counters[1] |= F_LIMIT_D
+            log_event(recorder, t, EV_LIMIT_DESCENT, i_down, down)
+    pitch = abs(math.atan(dot(plant.modal.pitch_row, state.q)))
+    if pitch > state.scalars[1]:
+        state.scalars[1] = pitch
+        if pitch > settings.pitch_limit and not state.counters[1] & F_LIMIT_P:
+            state.counters[1] |= F_LIMIT_P
+            log_event(recorder, t, EV_LIMIT_PITCH, -1, pitch)
 
 
 @jit
-def arrivals(t, A, R, W, X, rec):
+def arrivals(t, plant, state, switches, settings, recorder):
     """First arrivals within the tolerance (interpolated inside the step) and the hold."""
-    lo, hi = X.target - X.tol, X.target + X.tol
-    if R.z.max() < lo:
-        R.scalars[2] = np.nan
+    lo, hi = settings.target - settings.tol, settings.target + settings.tol
+    if state.z.max() < lo:
+        state.scalars[2] = np.nan
         return RET_DONE
     held = True
-    for i in range(A.nb):
-        within = abs(R.z[i] - X.target) <= X.tol
-        if within and math.isnan(R.arrival[i]):
-            a, b = R.z_prev[i], R.z[i]
+    for i in range(plant.bags.nb):
+        within = abs(state.z[i] - settings.target) <= settings.tol
+        if within and math.isnan(state.arrival[i]):
+            a, b = state.z_prev[i], state.z[i]
             edge = lo if a < lo else (hi if a > hi else np.nan)
             ta = t
             if not math.isnan(edge) and a != b:
-                ta = t - X.dt + X.dt * min(max((edge - a) / (b - a), 0.0), 1.0)
-            R.arrival[i] = ta
-            log_event(rec, ta, EV_ARRIVAL, i, R.z[i])
-        held = held and (within or W.attached[i] == 0.0)
+                ta = t - settings.dt + settings.dt * min(max((edge - a) / (b - a), 0.0), 1.0)
+            state.arrival[i] = ta
+            log_event(recorder, ta, EV_ARRIVAL, i, state.z[i])
+        held = held and (within or switches.attached[i] == 0.0)
     if not held:
-        R.scalars[2] = np.nan
+        state.scalars[2] = np.nan
         return RET_DONE
-    if math.isnan(R.scalars[2]):
-        R.scalars[2] = t
-    if t - R.scalars[2] >= X.hold_time - 1e-9:
-        log_event(rec, t, EV_TARGET_HELD, -1, X.hold_time)
+    if math.isnan(state.scalars[2]):
+        state.scalars[2] = t
+    if t - state.scalars[2] >= settings.hold_time - 1e-9:
+        log_event(recorder, t, EV_TARGET_HELD, -1, settings.hold_time)
         return RET_STOP
     return RET_DONE
 
 
 @jit
-def rates(A, R, W, X):
-    """Gas rates [mol/s] at the start of the step into R.ndot, the pressures and purge flows
-    into R.flow0; the holding forces and uplift-minus-hold gaps at the start into R.H_old,
-    R.gap."""
-    for i in range(A.nb):
-        fill = R.fill[i] * W.supply[i]
-        purge = purge_flow(R.opening[i], R.V[i], A.capacity[i], A.purge_max)
-        R.ndot[i] = moles_rate(R.p[i], fill, purge, A.RT) - W.leak[i] * R.n[i]
-        R.flow0[0, i], R.flow0[1, i] = R.p[i], purge
-    for g in range(A.ng):
-        R.H_old[g] = R.H[g]
-        R.gap[g] = group_uplift(A, R.V, W.attached, g) - R.H[g]
+def rates(plant, state, switches):
+    """Gas rates [mol/s] at the start of the step into state.ndot, the pressures and purge flows
+    into state.flow0; the holding forces and uplift-minus-hold gaps at the start into state.H_old,
+    state.gap."""
+    for i in range(plant.bags.nb):
+        fill = state.fill[i] * switches.supply[i]
+        purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],
+                           plant.bags.purge_max)
+        state.ndot[i] = (moles_rate(state.p[i], fill, purge, plant.bags.RT)
+                         - switches.leak[i] * state.n[i])
+        state.flow0[0, i], state.flow0[1, i] = state.p[i], purge
+    for g in range(plant.seabed.ng):
+        state.H_old[g] = state.H[g]
+        state.gap[g] = group_uplift(plant, state.V, switches.attached,
+                                    g) - state.H[g]
 
 
 @jit
-def mechanics(A, R, W, X, w_min, noise):
+def mechanics(plant, state, switches, settings, w_min, noise):
     """Advance the modal mechanics over the step (sub-steps near the seabed once free); the
     explicit force is extrapolated to mid-step from the previous step's (or sub-step's)."""
-    dt = X.dt
-    have_b = R.counters[1] & F_HAVE_B
-    b_mid, b_old, b_start = R.work[0], R.work[1], R.work[2]
-    if R.sep.any() and w_min < A.liftoff_clearance:
+    dt = settings.dt
+    have_b = state.counters[1] & F_HAVE_B
+    b_mid, b_old, b_start = state.work[0], state.work[1], state.work[2]
+    if state.sep.any() and w_min < plant.seabed.liftoff_clearance:
         h = dt / CONTACT_SUBSTEPS
-        b_start[:] = R.b
-        for i in range(A.nr):
-            b_old[i] = R.b[i] - (R.b[i] - R.b_prev[i]) * (h / dt) if have_b else R.b[i]
+        b_start[:] = state.b
+        for i in range(plant.modal.nr):
+            b_old[i] = (state.b[i] - (state.b[i] - state.b_prev[i]) * (h / dt) if have_b
+                        else state.b[i])
         for j in range(CONTACT_SUBSTEPS):
             if j:
-                _loads_at_state(A, R, W, noise)
-            for i in range(A.nr):
-                b_mid[i] = 1.5 * R.b[i] - 0.5 * b_old[i]
-                b_old[i] = R.b[i]
-            _implicit_step(A, R, h, b_mid)
-        R.b_prev[:] = b_start
+                _loads_at_state(plant, state, switches, noise)
+            for i in range(plant.modal.nr):
+                b_mid[i] = 1.5 * state.b[i] - 0.5 * b_old[i]
+                b_old[i] = state.b[i]
+            _implicit_step(plant, state, h, b_mid)
+        state.b_prev[:] = b_start
     else:
-        for i in range(A.nr):
-            b_mid[i] = 1.5 * R.b[i] - 0.5 * R.b_prev[i] if have_b else R.b[i]
-        _implicit_step(A, R, dt, b_mid)
-        R.b_prev[:] = R.b
-    R.counters[1] |= F_HAVE_B
+        for i in range(plant.modal.nr):
+            b_mid[i] = 1.5 * state.b[i] - 0.5 * state.b_prev[i] if have_b else state.b[i]
+        _implicit_step(plant, state, dt, b_mid)
+        state.b_prev[:] = state.b
+    state.counters[1] |= F_HAVE_B
 
 
 @jit
-def _loads_at_state(A, R, W, noise):
-    """The loads of the current (sub-step) state, into R."""
-    bag_motion(A, R.q, R.v, R.z, R.zd)
-    bag_gas(A, R.n, R.z, R.p, R.V)
-    bag_forces(A, R.V, R.zd, W.attached, W.current[0], R.point)
-    strip_loads(A, R.q, R.v, R.H, R.sep, W.current[0], noise, R.w, R.wv, R.line, R.contact,
-                R.active)
-    generalised_force(A, R.line, R.point, R.b)
+def _loads_at_state(plant, state, switches, noise):
+    """The loads of the current (sub-step) state, into ``state``."""
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
+    bag_gas(plant, state.n, state.z, state.p, state.V)
+    bag_forces(plant, state.V, state.zd, switches.attached, switches.current[0],
+               state.point)
+    strip_loads(plant, state.q, state.v, state.H, state.sep, switches.current[0], noise,
+                state.w, state.wv, state.line, state.contact, state.active)
+    generalised_force(plant, state.line, state.point, state.b)
 
 
 @jit
-def _implicit_step(A, R, h, b_mid):
+def _implicit_step(plant, state, h, b_mid):
     """One trapezoidal step of ``h`` [s]; the implicit matrix rebuilt when the contact
     pattern or the step length changed (the contact springs of the strips that changed
     added or taken away)."""
-    valid = bool(R.counters[1] & F_MATRIX)
+    valid = bool(state.counters[1] & F_MATRIX)
     changed = not valid
     if valid:
-        for s in range(A.ns):
-            if R.active[s] != R.last_active[s]:
+        for s in range(plant.strips.ns):
+            if state.active[s] != state.last_active[s]:
                 changed = True
                 break
-    if changed or R.scalars[3] != h:
+    if changed or state.scalars[3] != h:
         if not valid:
-            contact_matrices(A, R.active, R.stiff, R.damp)
+            contact_matrices(plant, state.active, state.stiff, state.damp)
         elif changed:
-            update_contact_matrices(A, R.active, R.last_active, R.stiff, R.damp)
-        implicit_matrix(A, h, R.stiff, R.damp, R.implicit)
-        R.last_active[:] = R.active
-        R.scalars[3] = h
-        R.counters[1] |= F_MATRIX
-    trapezoidal_step(A, R.q, R.v, b_mid, h, R.implicit, R.stiff, R.damp, R.work[3])
+            update_contact_matrices(plant, state.active, state.last_active, state.stiff,
+                                    state.damp)
+        implicit_matrix(plant, h, state.stiff, state.damp, state.implicit)
+        state.last_active[:] = state.active
+        state.scalars[3] = h
+        state.counters[1] |= F_MATRIX
+    trapezoidal_step(plant, state.q, state.v, b_mid, h, state.implicit, state.stiff,
+                     state.damp, state.work[3])
 
 
 @jit
-def finish_step(t, A, R, W, X, rec, noise):
+def finish_step(t, plant, state, switches, settings, recorder, noise):
     """Gas, venting, holding force, separation and breakout at the end of the step; leaves
-    the bags' motion and gas of the new state in R (fresh for the next step). A group that
+    the bags' motion and gas of the new state in ``state`` (fresh for the next step). A group that
     separated inside the step moves freely for the rest of it."""
-    dt = X.dt
-    bag_motion(A, R.q, R.v, R.z, R.zd)
-    for i in range(A.nb):
-        n = _gas_step(i, dt, A, R, W)
-        p = R.p[i]
-        out = vented_moles(n, p, A.capacity[i], A.relief[i], A.RT)  # spill, relief venting
+    dt = settings.dt
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
+    for i in range(plant.bags.nb):
+        n = _gas_step(i, dt, plant, state, switches)
+        p = state.p[i]
+        # spill, relief venting
+        out = vented_moles(n, p, plant.bags.capacity[i], plant.bags.relief[i], plant.bags.RT)
         if out > 0.0:
             n -= out
-            R.vented[i] += out * A.RT / p
-            R.vented_free[i] += out * A.RT / A.p_atm
-        R.n[i], R.p[i] = n, p
-        R.V[i] = gas_volume(n, p, A.RT, A.capacity[i])
-    R.counters[1] |= F_FRESH
-    for g in range(A.ng):
-        if R.sep[g]:
-            R.H[g] = released_holding(R.H[g], dt, A.release_time)
+            state.vented[i] += out * plant.bags.RT / p
+            state.vented_free[i] += out * plant.bags.RT / plant.bags.p_atm
+        state.n[i], state.p[i] = n, p
+        state.V[i] = gas_volume(n, p, plant.bags.RT, plant.bags.capacity[i])
+    state.counters[1] |= F_FRESH
+    for g in range(plant.seabed.ng):
+        if state.sep[g]:
+            state.H[g] = released_holding(state.H[g], dt, plant.seabed.release_time)
         else:
-            # the rate at the start of the step (its uplift, kept in R.gap + R.H_old), stepped by
-            # Adams-Bashforth 2 with the previous step's
-            rate = holding_rate(R.gap[g] + R.H_old[g], A.H0[g], A.breakout_time)
-            prev = R.H_rate[g]
-            R.H[g] += dt * (1.5 * rate - 0.5 * prev) if not math.isnan(prev) else dt * rate
-            R.H_rate[g] = rate
-        R.H[g] = max(R.H[g], 0.0)
-    separations(t, A, R, W, X, rec, noise)
-    breakouts(t, A, R, X, rec)
+            # the rate at the start of the step (its uplift, kept in state.gap + state.H_old),
+            # stepped by Adams-Bashforth 2 with the previous step's
+            rate = holding_rate(state.gap[g] + state.H_old[g], plant.seabed.H0[g],
+                                plant.seabed.breakout_time)
+            prev = state.H_rate[g]
+            state.H[g] += dt * (1.5 * rate - 0.5 * prev) if not math.isnan(prev) else dt * rate
+            state.H_rate[g] = rate
+        state.H[g] = max(state.H[g], 0.0)
+    separations(t, plant, state, switches, settings, recorder, noise)
+    breakouts(t, plant, state, settings, recorder)
 
 
 @jit
-def _gas_step(i, dt, A, R, W):
+def _gas_step(i, dt, plant, state, switches):
     """Bag ``i``'s gas [mol] at the end of the step (Heun: the rates at the start and at an
     Euler prediction at the new height, averaged; the commands are held over the step), with
-    the accounts of the step's flows; leaves the new pressure in R.p."""
-    fill = R.fill[i] * W.supply[i]
-    p0, purge0 = R.flow0[0, i], R.flow0[1, i]
-    p1 = ambient_pressure(R.z[i], A.water_depth, A.p_atm, A.rho_g)
-    n_pred = max(R.n[i] + dt * R.ndot[i], 0.0)
-    purge1 = purge_flow(R.opening[i], gas_volume(n_pred, p1, A.RT, A.capacity[i]),
-                        A.capacity[i], A.purge_max)
-    ndot1 = moles_rate(p1, fill, purge1, A.RT) - W.leak[i] * n_pred
-    R.gas_local[i] += fill * dt
-    R.gas_free[i] += 0.5 * (free_air(fill * dt, p0, A.p_atm) + free_air(fill * dt, p1, A.p_atm))
-    R.purged[i] += 0.5 * dt * (purge0 + purge1)
-    R.purged_free[i] += 0.5 * dt * (free_air(purge0, p0, A.p_atm) + free_air(purge1, p1, A.p_atm))
-    R.vented[i] += 0.5 * dt * W.leak[i] * A.RT * (R.n[i] / p0 + n_pred / p1)
-    R.vented_free[i] += 0.5 * dt * W.leak[i] * A.RT * (R.n[i] + n_pred) / A.p_atm
-    R.p[i] = p1
-    return max(R.n[i] + 0.5 * dt * (R.ndot[i] + ndot1), 0.0)
+    the accounts of the step's flows; leaves the new pressure in state.p."""
+    bags = plant.bags
+    fill = state.fill[i] * switches.supply[i]
+    p0, purge0 = state.flow0[0, i], state.flow0[1, i]
+    p1 = ambient_pressure(state.z[i], bags.water_depth, bags.p_atm, bags.rho_g)
+    n_pred = max(state.n[i] + dt * state.ndot[i], 0.0)
+    purge1 = purge_flow(state.opening[i], gas_volume(n_pred, p1, bags.RT, bags.capacity[i]),
+                        bags.capacity[i], bags.purge_max)
+    ndot1 = moles_rate(p1, fill, purge1, bags.RT) - switches.leak[i] * n_pred
+    state.gas_local[i] += fill * dt
+    state.gas_free[i] += 0.5 * (free_air(fill * dt, p0, bags.p_atm)
+                                + free_air(fill * dt, p1, bags.p_atm))
+    state.purged[i] += 0.5 * dt * (purge0 + purge1)
+    state.purged_free[i] += 0.5 * dt * (free_air(purge0, p0, bags.p_atm)
+                                        + free_air(purge1, p1, bags.p_atm))
+    state.vented[i] += 0.5 * dt * switches.leak[i] * bags.RT * (state.n[i] / p0 + n_pred / p1)
+    state.vented_free[i] += (0.5 * dt * switches.leak[i] * bags.RT * (state.n[i] + n_pred)
+                             / bags.p_atm)
+    state.p[i] = p1
+    return max(state.n[i] + 0.5 * dt * (state.ndot[i] + ndot1), 0.0)
 
 
 @jit
-def separations(t, A, R, W, X, rec, noise):
+def separations(t, plant, state, switches, settings, recorder, noise):
     """Held groups whose uplift now exceeds their hold separate, at a time interpolated
     inside the step; the mechanics of the step are then redone, held up to that time and free
     after it (sub-steps)."""
-    new = np.zeros(A.ng, np.bool_)
+    new = np.zeros(plant.seabed.ng, np.bool_)
     th_min = 1.0
-    for g in range(A.ng):
-        if R.sep[g]:
+    for g in range(plant.seabed.ng):
+        if state.sep[g]:
             continue
-        gap = group_uplift(A, R.V, W.attached, g) - R.H[g]
+        gap = group_uplift(plant, state.V, switches.attached, g) - state.H[g]
         if gap > 0.0:
-            g0 = R.gap[g]
+            g0 = state.gap[g]
             th = min(max(g0 / (g0 - gap), 0.0), 1.0) if g0 <= 0.0 else 0.0
             new[g] = True
             th_min = min(th_min, th)
-            log_event(rec, t + th * X.dt, EV_SEPARATION, g, gap + R.H[g])
+            log_event(recorder, t + th * settings.dt, EV_SEPARATION, g, gap + state.H[g])
             # held up to the separation, released exactly from it
-            H_sep = R.H_old[g] + th * (R.H[g] - R.H_old[g])
-            R.H[g] = released_holding(H_sep, (1.0 - th) * X.dt, A.release_time)
-            R.release[0, g], R.release[1, g] = t + th * X.dt, H_sep
+            H_sep = state.H_old[g] + th * (state.H[g] - state.H_old[g])
+            state.H[g] = released_holding(H_sep, (1.0 - th) * settings.dt,
+                                          plant.seabed.release_time)
+            state.release[0, g], state.release[1, g] = t + th * settings.dt, H_sep
     if not new.any():
         return
-    R.q[:] = R.work[4]
-    R.v[:] = R.work[5]
-    for part, free in ((th_min * X.dt, False), ((1.0 - th_min) * X.dt, True)):
+    state.q[:] = state.work[4]
+    state.v[:] = state.work[5]
+    for part, free in ((th_min * settings.dt, False), ((1.0 - th_min) * settings.dt, True)):
         if free:
-            R.sep[:] = R.sep | new
+            state.sep[:] = state.sep | new
         if part <= 0.0:
             continue
         h = part / CONTACT_SUBSTEPS
         for _ in range(CONTACT_SUBSTEPS):
-            _loads_at_state(A, R, W, noise)
-            _implicit_step(A, R, h, R.b)
-    R.counters[1] &= ~F_HAVE_B  # the suction's load steps in: restart the extrapolation
-    bag_motion(A, R.q, R.v, R.z, R.zd)
-    bag_gas(A, R.n, R.z, R.p, R.V)
+            _loads_at_state(plant, state, switches, noise)
+            _implicit_step(plant, state, h, state.b)
+    state.counters[1] &= ~F_HAVE_B  # the suction's load steps in: restart the extrapolation
+    bag_motion(plant, state.q, state.v, state.z, state.zd)
+    bag_gas(plant, state.n, state.z, state.p, state.V)
 
 
 @jit
-def breakouts(t, A, R, X, rec):
+def breakouts(t, plant, state, settings, recorder):
     """Breakout is complete once every group's released hold is below 0.1 % of its H_0; the
     time is where the exact release from the separation crosses that level."""
-    for g in range(A.ng):
-        thr = COMPLETE_FRACTION * A.H0[g]
-        if R.sep[g] and not R.broken[g] and R.H[g] <= thr:
-            R.broken[g] = True
-            t_sep, H_sep = R.release[0, g], R.release[1, g]
-            tb = t + X.dt
+    for g in range(plant.seabed.ng):
+        thr = COMPLETE_FRACTION * plant.seabed.H0[g]
+        if state.sep[g] and not state.broken[g] and state.H[g] <= thr:
+            state.broken[g] = True
+            t_sep, H_sep = state.release[0, g], state.release[1, g]
+            tb = t + settings.dt
             if thr > 0.0 and H_sep > thr:
-                tb = t_sep + A.release_time * math.log(H_sep / thr)
-            if R.broken.all():
-                log_event(rec, tb, EV_BREAKOUT, -1, R.H.sum())
+                tb = t_sep + plant.seabed.release_time * math.log(H_sep / thr)
+            if state.broken.all():
+                log_event(recorder, tb, EV_BREAKOUT, -1, state.H.sum())
 
 
 @jit
-def healthy(R):
+def healthy(state):
     """False when the state is not finite or has blown up."""
-    for i in range(R.q.size):
-        if not (abs(R.q[i]) < 1e9 and abs(R.v[i]) < 1e9):
+    for i in range(state.q.size):
+        if not (abs(state.q[i]) < 1e9 and abs(state.v[i]) < 1e9):
             return False
-    for i in range(R.n.size):
-        if not math.isfinite(R.n[i]):
+    for i in range(state.n.size):
+        if not math.isfinite(state.n[i]):
             return False
     return True

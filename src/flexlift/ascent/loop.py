@@ -22,6 +22,7 @@ from flexlift.ascent.faults import apply_fault, check_faults, fault_step
 from flexlift.ascent.noise import ForceNoise, MeasurementNoise
 from flexlift.ascent.paper import paper_plant
 from flexlift.ascent.plant import Plant, check_neutral, coupled_plant
+from flexlift.ascent.records import LoopInputs
 from flexlift.ascent.result import Result, build_result
 from flexlift.ascent.state import (
     EV_NUMERICS,
@@ -100,16 +101,20 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
 
 
 class Ascent:
-    """One run: the arrays of the compiled loop and what happens between its chunks."""
+    """One run: the records of the compiled loop and what happens between its chunks.
+
+    The plant's records are ``plant.modal``, ``.strips``, ``.bags`` and ``.seabed``; the
+    run's are ``controllers``, ``control_state``, ``state``, ``switches``, ``settings`` and
+    ``recorder`` (:class:`~flexlift.ascent.records.LoopInputs`)."""
 
     def __init__(self, scenario, plant: Plant, mode: str, T_end: float, engine):
         sim, lim, c = scenario.simulation, scenario.limits, scenario.control
         self.scenario, self.plant, self.mode = scenario, plant, mode
-        a = self.A = plant.arrays
+        modal, strips, bags, seabed = plant.modal, plant.strips, plant.bags, plant.seabed
         dt = sim.time_step_s
         table, self.external, fill = fuzzy_maps(scenario, engine)
-        self.C, self.S = controller_for(scenario, plant, mode, table, fill)
-        self.X = Settings(
+        self.controllers, self.control_state = controller_for(scenario, plant, mode, table, fill)
+        self.settings = Settings(
             dt=dt, n_steps=int(math.ceil(T_end / dt - 1e-9)),
             k_ctrl=max(1, int(round(1.0 / c.sample_rate_Hz / dt))),
             k_out=max(1, int(round(sim.output_interval_s / dt))),
@@ -117,52 +122,61 @@ class Ascent:
             target=c.target_height_m, tol=lim.arrival_tolerance_m, hold_time=sim.hold_time_s,
             v_limit=lim.ascent_velocity_m_s, v_down_limit=lim.descent_velocity_m_s,
             pitch_limit=math.radians(lim.pitch_deg),
-            top_limit=a.water_depth - lim.surface_clearance_m - a.top_offset,
+            top_limit=bags.water_depth - lim.surface_clearance_m - bags.top_offset,
             external=self.external is not None)
-        self.R = new_run_state(a.nr, a.nb, a.ns, a.ng)
-        self.W = new_switches(a.nb, a.ns)
-        self.W.current[0] = scenario.disturbance.current_m_s
+        self.state = new_run_state(modal.nr, bags.nb, strips.ns, seabed.ng)
+        self.switches = new_switches(bags.nb, strips.ns)
+        self.switches.current[0] = scenario.disturbance.current_m_s
         # simulation.duration_s: auto: buffers for a first stretch, grown as the run goes on
-        first = self.X.n_steps if sim.duration_s != "auto" else min(
-            self.X.n_steps, int(AUTO_FIRST_S / dt))
-        self.rec = new_record(first, self.X.k_out, self.X.k_str, a.nb, a.nr, a.ng, a.ns)
+        first = self.settings.n_steps if sim.duration_s != "auto" else min(
+            self.settings.n_steps, int(AUTO_FIRST_S / dt))
+        self.recorder = new_record(first, self.settings.k_out, self.settings.k_str, bags.nb,
+                                   modal.nr, seabed.ng, strips.ns)
         self.force_noise = ForceNoise(scenario, dt, plant.strip_element, plant.hull.n_elements)
-        self.meas_noise = MeasurementNoise(scenario, a.nb)
+        self.meas_noise = MeasurementNoise(scenario, bags.nb)
         self.faults = sorted(scenario.faults, key=lambda f: f.time_s)
         self.fault_events: list[tuple[float, str, str, str]] = []
         self._initial_state()
 
+    def inputs(self) -> LoopInputs:
+        """The compiled loop's records, as they are now (the switches' noise changes between
+        chunks)."""
+        return LoopInputs(plant=self.plant.records, controllers=self.controllers,
+                          control_state=self.control_state, state=self.state,
+                          switches=self.switches, settings=self.settings,
+                          recorder=self.recorder)
+
     def _initial_state(self) -> None:
         """Neutral gas, the full hold, and the structure at rest on the held seabed springs."""
-        R = self.R
-        R.n[:] = self.plant.initial_moles()
-        R.H[:] = self.A.H0
-        R.H_rate[:] = np.nan
-        kernel.initial_equilibrium(self.A, R, self.W)
+        state = self.state
+        state.n[:] = self.plant.initial_moles()
+        state.H[:] = self.plant.seabed.H0
+        state.H_rate[:] = np.nan
+        kernel.initial_equilibrium(self.inputs())
 
     def run(self, progress=None) -> Result:
-        X, R = self.X, self.R
+        settings, state, recorder = self.settings, self.state, self.recorder
         fi, error = 0, None
-        while R.counters[0] <= X.n_steps:
-            k = int(R.counters[0])
-            while fi < len(self.faults) and fault_step(self.faults[fi], X.dt) <= k:
-                self._fault(self.faults[fi], k * X.dt)
+        while state.counters[0] <= settings.n_steps:
+            k = int(state.counters[0])
+            while fi < len(self.faults) and fault_step(self.faults[fi], settings.dt) <= k:
+                self._fault(self.faults[fi], k * settings.dt)
                 fi += 1
-            k_stop = min(k + CHUNK_STEPS, X.n_steps + 1)
+            k_stop = min(k + CHUNK_STEPS, settings.n_steps + 1)
             if fi < len(self.faults):
-                k_stop = min(k_stop, max(fault_step(self.faults[fi], X.dt), k + 1))
+                k_stop = min(k_stop, max(fault_step(self.faults[fi], settings.dt), k + 1))
             self._noise(k, k_stop)
             self._room(k_stop)
             code = self._advance(k_stop)
             if progress is not None:
-                progress(min(R.counters[0] / max(X.n_steps, 1), 1.0))
+                progress(min(state.counters[0] / max(settings.n_steps, 1), 1.0))
             if code == RET_STOP:
                 break
-        if self.rec.ev_code[:self.rec.counts[2]].tolist().count(EV_NUMERICS):
-            error = f"numerics failed at t = {R.counters[0] * X.dt:.1f} s: the state is not " \
-                    "finite or blew up"
-        elif self.rec.counts[0] == 0 or self.rec.t[self.rec.counts[0] - 1] != self._t_last():
-            kernel.final_row(self._t_last(), self.A, self.C, self.S, R, self.W, self.rec)
+        if recorder.ev_code[:recorder.counts[2]].tolist().count(EV_NUMERICS):
+            error = f"numerics failed at t = {state.counters[0] * settings.dt:.1f} s: the " \
+                    "state is not finite or blew up"
+        elif recorder.counts[0] == 0 or recorder.t[recorder.counts[0] - 1] != self._t_last():
+            kernel.final_row(self._t_last(), self.inputs())
         if progress is not None:
             progress(1.0)
         result = build_result(self, error)
@@ -171,41 +185,43 @@ class Ascent:
         return result
 
     def _t_last(self) -> float:
-        return (int(self.R.counters[0]) - 1) * self.X.dt
+        return (int(self.state.counters[0]) - 1) * self.settings.dt
 
     def _advance(self, k_stop: int) -> int:
         """The compiled loop to ``k_stop``, evaluating an external supervisor when asked."""
         while True:
-            code = kernel.advance(self.A, self.C, self.S, self.R, self.W, self.X, self.rec, k_stop)
+            code = kernel.advance(self.inputs(), k_stop)
             if code != RET_NEED_U:
                 return code
-            S = self.S
-            u = np.asarray(self.external(np.column_stack([S.e_in, S.r_in])), dtype=float)
-            S.u[:] = np.where(np.isnan(S.t_sep), 0.0, u.reshape(-1))
+            cs = self.control_state
+            u = np.asarray(self.external(np.column_stack([cs.e_in, cs.r_in])), dtype=float)
+            cs.u[:] = np.where(np.isnan(cs.t_sep), 0.0, u.reshape(-1))
 
     def _room(self, k_stop: int) -> None:
         """Grow the record (doubling) so that it holds the rows and snapshots to ``k_stop``."""
-        X, rec = self.X, self.rec
-        if (k_stop // X.k_out + 2 <= rec.t.size and k_stop // X.k_str + 2 <= rec.snap_t.size):
+        settings, rec, p = self.settings, self.recorder, self.plant
+        if (k_stop // settings.k_out + 2 <= rec.t.size
+                and k_stop // settings.k_str + 2 <= rec.snap_t.size):
             return
-        a = self.A
-        steps = min(max(2 * (rec.t.size - 2) * X.k_out, k_stop), X.n_steps)
-        new = new_record(steps, X.k_out, X.k_str, a.nb, a.nr, a.ng, a.ns)
+        steps = min(max(2 * (rec.t.size - 2) * settings.k_out, k_stop), settings.n_steps)
+        new = new_record(steps, settings.k_out, settings.k_str, p.bags.nb, p.modal.nr,
+                         p.seabed.ng, p.strips.ns)
         for old, big in zip(rec, new):
             big[: old.shape[0]] = old
-        self.rec = new
+        self.recorder = new
 
     def _fault(self, fault, t: float) -> None:
-        detail = apply_fault(fault, t, list(self.plant.names), self.W, self.C.bags, self.S)
+        detail = apply_fault(fault, t, list(self.plant.names), self.switches,
+                             self.controllers.bags, self.control_state)
         self.fault_events.append((t, fault.kind, fault.bag, detail))
 
     def _noise(self, k0: int, k1: int) -> None:
         """Noise rows of steps k0 .. k1 - 1 and of their control samples."""
-        W, X = self.W, self.X
+        sw, settings = self.switches, self.settings
         if self.force_noise.on:
-            self.W = W = W._replace(noise=self.force_noise.rows(k1 - k0))
-            W.chunk[0] = k0
+            self.switches = sw = sw._replace(noise=self.force_noise.rows(k1 - k0))
+            sw.chunk[0] = k0
         if self.meas_noise.on:
-            j0, j1 = k0 // X.k_ctrl, (k1 - 1) // X.k_ctrl
-            self.W = W = W._replace(meas_noise=self.meas_noise.rows(j0, j1))
-            W.chunk[1] = j0
+            j0, j1 = k0 // settings.k_ctrl, (k1 - 1) // settings.k_ctrl
+            self.switches = sw = sw._replace(meas_noise=self.meas_noise.rows(j0, j1))
+            sw.chunk[1] = j0

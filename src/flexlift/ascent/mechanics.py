@@ -16,6 +16,10 @@ in contact (implicit, so the stiff seabed penalty is stable at any step) and b e
 generalised force, extrapolated to mid-step (Adams-Bashforth 2): the trapezoidal rule
 (Newmark's average acceleration, second order, A-stable). The implicit matrix is cached and
 rebuilt only when the set of strips in contact changes, or the step length does.
+
+Each law takes the plant (:class:`~flexlift.ascent.records.PlantRecords`, a struct in the loop)
+and reads the part it needs (``bags = plant.bags``): passing the part itself would cost the
+loop a reference count per call.
 """
 
 from __future__ import annotations
@@ -30,111 +34,118 @@ from flexlift.physics.seabed import contact_load, in_contact
 
 
 @jit
-def bag_motion(A, q, v, z, zd):
+def bag_motion(plant, q, v, z, zd):
     """Heights [m] and vertical speeds [m/s] of the bag points (retained modes), into z, zd."""
-    matvec(A.bag_shape, q, z)
-    matvec(A.bag_shape, v, zd)
+    bags = plant.bags
+    matvec(bags.shape, q, z)
+    matvec(bags.shape, v, zd)
 
 
 @jit
-def bag_gas(A, n, z, p, V):
+def bag_gas(plant, n, z, p, V):
     """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V."""
+    bags = plant.bags
     for i in range(n.size):
-        p[i] = ambient_pressure(z[i], A.water_depth, A.p_atm, A.rho_g)
-        V[i] = gas_volume(n[i], p[i], A.RT, A.capacity[i])
+        p[i] = ambient_pressure(z[i], bags.water_depth, bags.p_atm, bags.rho_g)
+        V[i] = gas_volume(n[i], p[i], bags.RT, bags.capacity[i])
 
 
 @jit
-def bag_forces(A, V, zd, attached, current, point):
+def bag_forces(plant, V, zd, attached, current, point):
     """Force of every bag on the structure [N], into ``point``: buoyancy minus the bag's drag
     on its speed relative to the ``current`` [m/s], nothing once its sling is broken."""
+    bags = plant.bags
     for i in range(V.size):
-        point[i] = (buoyancy(V[i], A.rho_g) + drag(zd[i] - current, A.bag_drag[i])) * attached[i]
+        point[i] = (buoyancy(V[i], bags.rho_g) + drag(zd[i] - current, bags.drag[i])) * attached[i]
 
 
 @jit
-def strip_loads(A, q, v, H, sep, current, noise, w, wv, line, contact, active):
+def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, active):
     """Strip motion (w [m], wv [m/s]), the explicit line loads (drag, noise, released
     suction) and the contact line loads [N/m], and which strips are in contact (``active``:
     their springs go into the implicit step). Returns the lowest strip height [m]."""
-    matvec(A.strip_shape, q, w)
-    matvec(A.strip_shape, v, wv)
+    strips = plant.strips
+    matvec(strips.shape, q, w)
+    matvec(strips.shape, v, wv)
     w_min = np.inf
     for s in range(w.size):
-        g = A.strip_group[s]
+        g = strips.group[s]
         held = not sep[g]
-        line[s] = drag(wv[s] - current, A.strip_drag[s]) + noise[s]
+        line[s] = drag(wv[s] - current, strips.drag[s]) + noise[s]
         if not held:
-            line[s] -= H[g] * A.strip_hold[s]
-        contact[s] = contact_load(w[s], wv[s], A.strip_k[s], A.strip_c[s], held)
-        active[s] = held or in_contact(w[s], wv[s], A.strip_k[s], A.strip_c[s])
+            line[s] -= H[g] * strips.hold[s]
+        contact[s] = contact_load(w[s], wv[s], strips.contact_k[s], strips.contact_c[s], held)
+        active[s] = held or in_contact(w[s], wv[s], strips.contact_k[s], strips.contact_c[s])
         w_min = min(w_min, w[s])
     return w_min
 
 
 @jit
-def generalised_force(A, line, point, b):
+def generalised_force(plant, line, point, b):
     """The explicit generalised force [N] into ``b``: strip line loads, bag forces, weight."""
-    b[:] = A.weight_force
-    matvec_add(A.strip_force, line, b)
-    matvec_add(A.bag_force, point, b)
+    b[:] = plant.modal.weight_force
+    matvec_add(plant.strips.force, line, b)
+    matvec_add(plant.bags.force, point, b)
 
 
 @jit
-def contact_matrices(A, active, stiff, damp):
+def contact_matrices(plant, active, stiff, damp):
     """Modal stiffness and damping [per modal coordinate] of the strips in contact."""
     stiff[:] = 0.0
     damp[:] = 0.0
     for s in range(active.size):
         if active[s]:
-            _add_springs(A, s, 1.0, stiff, damp)
+            _add_springs(plant, s, 1.0, stiff, damp)
 
 
 @jit
-def update_contact_matrices(A, active, last, stiff, damp):
+def update_contact_matrices(plant, active, last, stiff, damp):
     """:func:`contact_matrices` for the pattern ``active`` from those of the pattern ``last``:
     the springs of the strips whose contact changed added or taken away (a moving touchdown
     changes a few strips at a time; rebuilding all of them was most of a staged lift's time)."""
     for s in range(active.size):
         if active[s] != last[s]:
             sign = 1.0 if active[s] else -1.0
-            _add_springs(A, s, sign, stiff, damp)
+            _add_springs(plant, s, sign, stiff, damp)
 
 
 @jit
-def _add_springs(A, s, sign, stiff, damp):
+def _add_springs(plant, s, sign, stiff, damp):
     """Add ``sign`` times strip ``s``'s contact spring and damper to the modal matrices."""
-    nr = A.nr
+    strips = plant.strips
+    nr = stiff.shape[0]
     for i in range(nr):
-        fi = A.strip_force[i, s] * sign
+        fi = strips.force[i, s] * sign
         if fi == 0.0:
             continue
         for j in range(nr):
-            sj = A.strip_shape[s, j]
-            stiff[i, j] += fi * A.strip_k[s] * sj
-            damp[i, j] += fi * A.strip_c[s] * sj
+            sj = strips.shape[s, j]
+            stiff[i, j] += fi * strips.contact_k[s] * sj
+            damp[i, j] += fi * strips.contact_c[s] * sj
 
 
 @jit
-def implicit_matrix(A, h, stiff, damp, out):
+def implicit_matrix(plant, h, stiff, damp, out):
     """Inverse of I + h^2/4 K + h/2 C for a step of ``h`` [s], into ``out``."""
-    nr = A.nr
+    modal = plant.modal
+    nr = modal.nr
     M = np.empty((nr, nr))
     for i in range(nr):
         for j in range(nr):
             M[i, j] = 0.25 * h * h * stiff[i, j] + 0.5 * h * damp[i, j]
-        M[i, i] += 1.0 + 0.25 * h * h * A.omega2[i] + 0.5 * h * A.damping[i]
+        M[i, i] += 1.0 + 0.25 * h * h * modal.omega2[i] + 0.5 * h * modal.damping[i]
     out[:] = np.linalg.inv(M)
 
 
 @jit
-def trapezoidal_step(A, q, v, b_mid, h, implicit, stiff, damp, work):
+def trapezoidal_step(plant, q, v, b_mid, h, implicit, stiff, damp, work):
     """Advance q, q' by ``h`` [s] in place (trapezoidal rule, contact springs implicit, the
     other forces ``b_mid`` taken at mid-step); ``work`` (nr,) scratch."""
-    nr = A.nr
+    modal = plant.modal
+    nr = modal.nr
     for i in range(nr):  # work = h (b - K q - C v) - h^2/2 K v
-        s = b_mid[i] - A.omega2[i] * q[i] - A.damping[i] * v[i]
-        kv = A.omega2[i] * v[i]
+        s = b_mid[i] - modal.omega2[i] * q[i] - modal.damping[i] * v[i]
+        kv = modal.omega2[i] * v[i]
         for j in range(nr):
             s -= stiff[i, j] * q[j] + damp[i, j] * v[j]
             kv += stiff[i, j] * v[j]
@@ -148,7 +159,7 @@ def trapezoidal_step(A, q, v, b_mid, h, implicit, stiff, damp, work):
 
 
 @jit
-def accelerations(A, q, v, b, contact):
+def accelerations(plant, q, v, b, contact):
     """Modal accelerations [per modal coordinate] at a state: every load, contact included."""
-    a = b - A.omega2 * q - A.damping * v
-    return matvec_add(A.strip_force, contact, a)
+    a = b - plant.modal.omega2 * q - plant.modal.damping * v
+    return matvec_add(plant.strips.force, contact, a)

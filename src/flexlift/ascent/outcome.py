@@ -59,11 +59,11 @@ def judge(run, ds, events: list[dict], crit: dict, reasons: dict, error) -> Outc
                                           for k in broken))
     if crit.get("reached_target", True):
         return Outcome("safe", f"every limit held and the target was held for "
-                               f"{run.X.hold_time:.0f} s")
+                               f"{run.settings.hold_time:.0f} s")
     if not any(e["kind"] == "separation" for e in events):
         return _not_separated(run, ds, reasons.get("reached_target", "never separated"))
-    att = np.asarray(run.W.attached) > 0
-    arrived = np.isfinite(run.R.arrival) & att
+    att = np.asarray(run.switches.attached) > 0
+    arrived = np.isfinite(run.state.arrival) & att
     if not arrived[att].all():
         return _short_of_target(run, ds, att & ~arrived)
     return _not_held(run, ds, att)
@@ -76,7 +76,7 @@ def remaining_ascent_s(scenario, plant, z_from: float, from_rest: bool = True) -
     time lost decelerating, v / 2a, and accelerating (``from_rest``), another v / 2a."""
     from flexlift.control.profile import speed_limit
 
-    c, a = scenario.control, plant.arrays
+    c, a = scenario.control, plant.bags
     dist = c.target_height_m - z_from
     if dist <= 0:
         return 0.0
@@ -142,7 +142,7 @@ def _short_of_target(run, ds, behind: np.ndarray) -> Outcome:
     idx = np.flatnonzero(behind)
     low = idx[np.argmin(z[-1, idx])]
     names = [str(b) for b in ds.bag.values]
-    n, N = idx.size, int(np.count_nonzero(np.asarray(run.W.attached) > 0))
+    n, N = idx.size, int(np.count_nonzero(np.asarray(run.switches.attached) > 0))
     plan = sc.control.ascent_speed_m_s
     rising = bool(np.all(speed[idx] >= RISING_FRACTION * plan))
     ref = ds.reference_height.values[-1, idx] if "reference_height" in ds else np.full(n, np.nan)
@@ -174,7 +174,7 @@ def _oscillation(t: np.ndarray, e: np.ndarray) -> tuple[float, float | None]:
 
 
 def _not_held(run, ds, att: np.ndarray) -> Outcome:
-    sc, R = run.scenario, run.R
+    sc, R = run.scenario, run.state
     t, z = ds.time.values, ds.height.values
     end, target, tol = float(t[-1]), sc.control.target_height_m, sc.limits.arrival_tolerance_m
     hold = sc.simulation.hold_time_s

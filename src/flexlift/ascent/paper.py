@@ -3,8 +3,8 @@
 Each external bag i sees only the unsorted-mdc 4-state model of
 :func:`flexlift.dynamics.reduce.paper_bag_model` (the wet hull's two rigid modes at the bag's node; the
 flexible modes folded into the feedthrough D) from the vertical force at its node to the
-displacement there, with no coupling to the other bags. In :class:`~flexlift.ascent.plant.
-PlantArrays` form that is two modal coordinates per bag, one strip per bag (its tributary
+displacement there, with no coupling to the other bags. In the records of
+:mod:`flexlift.ascent.records` that is two modal coordinates per bag, one strip per bag (its tributary
 length, the hull divided at the midpoints between bag points) and one holding group per bag:
 
 - the force on bag i is its own lift and bag drag, minus its tributary share of the wet
@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexlift.ascent.plant import Plant, PlantArrays, coupled_plant
+from flexlift.ascent.plant import Plant, coupled_plant
+from flexlift.ascent.records import Bags, Modal, Seabed, Strips
 from flexlift.dynamics.reduce import paper_bag_model
 
 
@@ -42,7 +43,7 @@ def tributary(x: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:
 def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
     """The paper's uncoupled plant of ``scenario`` (from its coupled plant, built if not given)."""
     P = coupled or coupled_plant(scenario)
-    a = P.arrays
+    pb, pstrips, psb = P.bags, P.strips, P.seabed
     ext = np.flatnonzero(P.external)
     ne = ext.size
     models = [paper_bag_model(P.modes, P.hull.nearest_node(P.x_point[i]),
@@ -50,14 +51,14 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
     L = P.hull.length
     x = P.x_point[ext]
     trib, lo = tributary(x, L)
-    net_weight = P.wet_weight - a.rho_g * float(a.capacity[~P.external].sum())
+    net_weight = P.wet_weight - pb.rho_g * float(pb.capacity[~P.external].sum())
     W = net_weight * trib / L
     stern, bow = P.hold_stern_bow
     from flexlift.physics.seabed import holding_shape
 
     hold = np.array([holding_shape(np.linspace(s, s + t, 201), L, stern, bow).mean() * t
                      for s, t in zip(lo, trib)])
-    H0 = a.H0[0] * hold / hold.sum()
+    H0 = psb.H0[0] * hold / hold.sum()
     nr = 2 * ne
     om2, damp = np.zeros(nr), np.zeros(nr)
     shape, force = np.zeros((ne, nr)), np.zeros((nr, ne))
@@ -71,24 +72,28 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
     xc = x - x.mean()
     pitch_row = (xc @ shape) / float(xc @ xc) if ne > 1 else np.zeros(nr)
     eye = np.eye(ne)
-    arrays = PlantArrays(
-        nr=nr, nb=ne, ns=ne, ng=ne, omega2=om2, damping=damp,
-        strip_shape=shape.copy(), strip_force=force * trib[None, :], strip_weight=trib.copy(),
-        strip_drag=np.full(ne, a.strip_drag[0]), strip_k=np.full(ne, a.strip_k[0]),
-        strip_c=np.full(ne, a.strip_c[0]), strip_group=np.arange(ne, dtype=np.int64),
-        strip_hold=1.0 / trib, hold_force=-force.copy(), H0=H0, group_weight=W,
-        breakout_time=a.breakout_time, release_time=a.release_time,
-        bag_shape=shape.copy(), bag_slope=np.tile(pitch_row, (ne, 1)), bag_force=force.copy(),
-        bag_group=np.arange(ne, dtype=np.int64), capacity=a.capacity[ext].copy(),
-        relief=np.zeros(ne), top_offset=a.top_offset[ext].copy(), bag_drag=a.bag_drag[ext].copy(),
-        weight_force=-(force @ W), pitch_row=pitch_row, heave_row=shape.mean(axis=0),
-        corr_strip=eye * (D * trib)[:, None], corr_bag=eye * D[:, None], corr_weight=-W * D,
-        slope_strip=np.zeros((ne, ne)), slope_bag=np.zeros((ne, ne)), slope_weight=np.zeros(ne),
-        RT=a.RT, p_atm=a.p_atm, rho_g=a.rho_g, water_depth=a.water_depth,
-        purge_max=a.purge_max, liftoff_clearance=a.liftoff_clearance)
+    modal = Modal(nr=nr, omega2=om2, damping=damp, weight_force=-(force @ W),
+                  pitch_row=pitch_row, heave_row=shape.mean(axis=0))
+    strips = Strips(
+        ns=ne, shape=shape.copy(), force=force * trib[None, :], weight=trib.copy(),
+        drag=np.full(ne, pstrips.drag[0]), contact_k=np.full(ne, pstrips.contact_k[0]),
+        contact_c=np.full(ne, pstrips.contact_c[0]), group=np.arange(ne, dtype=np.int64),
+        hold=1.0 / trib)
+    bags = Bags(
+        nb=ne, shape=shape.copy(), slope=np.tile(pitch_row, (ne, 1)), force=force.copy(),
+        group=np.arange(ne, dtype=np.int64), capacity=pb.capacity[ext].copy(),
+        relief=np.zeros(ne), top_offset=pb.top_offset[ext].copy(), drag=pb.drag[ext].copy(),
+        purge_max=pb.purge_max, RT=pb.RT, p_atm=pb.p_atm, rho_g=pb.rho_g,
+        water_depth=pb.water_depth, corr_strip=eye * (D * trib)[:, None], corr_bag=eye * D[:, None],
+        corr_weight=-W * D, slope_strip=np.zeros((ne, ne)), slope_bag=np.zeros((ne, ne)),
+        slope_weight=np.zeros(ne))
+    seabed = Seabed(ng=ne, hold_force=-force.copy(), H0=H0, group_weight=W,
+                    breakout_time=psb.breakout_time, release_time=psb.release_time,
+                    liftoff_clearance=psb.liftoff_clearance)
     return Plant(kind="paper", names=tuple(P.names[i] for i in ext), external=np.ones(ne, bool),
-                 x_point=x.copy(), spans=(None,) * ne, neutral_volume=W / a.rho_g,
-                 strip_x=x.copy(), strip_element=P.hull.element_of(x), arrays=arrays, hull=P.hull, modes=P.modes, plan=P.plan,
+                 x_point=x.copy(), spans=(None,) * ne, neutral_volume=W / pb.rho_g,
+                 strip_x=x.copy(), strip_element=P.hull.element_of(x), modal=modal, strips=strips,
+                 bags=bags, seabed=seabed, hull=P.hull, modes=P.modes, plan=P.plan,
                  mass_line=P.mass_line, wet_weight=P.wet_weight, hold_stern_bow=P.hold_stern_bow,
                  gravity=P.gravity, seawater_density=P.seawater_density,
                  steel_density=P.steel_density)

@@ -17,19 +17,21 @@ U_g = sum of its bags' lift - W_g.
 - The paper's plant (:func:`flexlift.ascent.paper.paper_plant`): each external bag on its own
   4-state model, two modes per bag and no coupling; one strip and one holding group per bag.
 
-:class:`PlantArrays` is what the compiled loop reads; :class:`Plant` adds the names and the
-structure for the results. Units: SI throughout (N, m, s, mol, Pa).
+:class:`Plant` holds what the compiled loop reads, one record per part
+(:mod:`flexlift.ascent.records`: modal, strips, bags, seabed; each built by its own function
+below), and the names and the structure for the results. Units: SI throughout (N,
+m, s, mol, Pa).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 
 from flexlift import constants as C
+from flexlift.ascent.records import Bags, Modal, PlantRecords, Seabed, Strips
 from flexlift.control.sequence import stage_groups
 from flexlift.errors import InputError
 from flexlift.loads.liftplan import LiftPlan, plan_lift
@@ -37,56 +39,6 @@ from flexlift.physics import gas, hydro, seabed
 from flexlift.structure.beam import assemble
 from flexlift.structure.hull import Hull, hull_from_scenario
 from flexlift.structure.modes import Modes, compute_modes
-
-
-class PlantArrays(NamedTuple):
-    """Everything the compiled loop needs about a plant (read only), SI.
-
-    Sizes: nr modal coordinates, nb bags, ns strips, ng holding groups.
-    """
-
-    nr: int
-    nb: int
-    ns: int
-    ng: int
-    omega2: np.ndarray  # (nr,) omega^2 [rad^2/s^2]
-    damping: np.ndarray  # (nr,) 2 zeta omega [1/s]
-    strip_shape: np.ndarray  # (ns, nr) displacement at each strip per unit q [m / (m sqrt kg)]
-    strip_force: np.ndarray  # (nr, ns) generalised force per unit line load at a strip [m]
-    strip_weight: np.ndarray  # (ns,) quadrature weight: a strip's line load times it is a force [m]
-    strip_drag: np.ndarray  # (ns,) 1/2 rho C_D B [kg/m^2]
-    strip_k: np.ndarray  # (ns,) seabed contact stiffness per length [N/m^2]
-    strip_c: np.ndarray  # (ns,) seabed contact damping per length [N s/m^2]
-    strip_group: np.ndarray  # (ns,) holding group of each strip
-    strip_hold: np.ndarray  # (ns,) holding line load per unit H of its group [1/m]
-    hold_force: np.ndarray  # (nr, ng) generalised force per unit H of each group (down) [-]
-    H0: np.ndarray  # (ng,) initial holding force [N]
-    group_weight: np.ndarray  # (ng,) wet weight W_g a group's bags must lift [N]
-    breakout_time: float  # T_b [s]
-    release_time: float  # tau_r [s]
-    bag_shape: np.ndarray  # (nb, nr) displacement at each bag point per unit q
-    bag_slope: np.ndarray  # (nb, nr) slope (local pitch angle) at each bag point per unit q
-    bag_force: np.ndarray  # (nr, nb) generalised force per unit bag force
-    bag_group: np.ndarray  # (nb,) holding group each bag lifts
-    capacity: np.ndarray  # (nb,) bag capacity V_max [m^3]
-    relief: np.ndarray  # (nb,) over-pressure relief setting (0: open bag) [Pa]
-    top_offset: np.ndarray  # (nb,) height of a bag's top above the hull bottom [m]
-    bag_drag: np.ndarray  # (nb,) 1/2 rho C_D,bag A [kg/m]
-    weight_force: np.ndarray  # (nr,) generalised wet weight (point masses included) [N]
-    pitch_row: np.ndarray  # (nr,) hull pitch angle per unit q [rad]
-    heave_row: np.ndarray  # (nr,) heave of the centre of mass per unit q [m]
-    corr_strip: np.ndarray  # (nb, ns) static correction of the heights per unit line load
-    corr_bag: np.ndarray  # (nb, nb) ... per unit bag force
-    corr_weight: np.ndarray  # (nb,) ... of the wet weight [m]
-    slope_strip: np.ndarray  # (nb, ns) static correction of the slopes per unit line load
-    slope_bag: np.ndarray  # (nb, nb) ... per unit bag force
-    slope_weight: np.ndarray  # (nb,) ... of the wet weight [rad]
-    RT: float  # R T of the gas [J/mol]
-    p_atm: float  # [Pa]
-    rho_g: float  # seawater density times gravity [N/m^3]
-    water_depth: float  # [m]
-    purge_max: float  # Q_out,max [m^3/s]
-    liftoff_clearance: float  # the whole structure is clear of the seabed above this [m]
 
 
 @dataclass(frozen=True)
@@ -98,6 +50,8 @@ class Plant:
         None [m])
     neutral_volume : (nb,) gas volumes that hold the structure neutral on the seabed [m^3]
     strip_x : (ns,) strip positions [m]; strip_element : (ns,) the element each lies in
+    modal, strips, bags, seabed : the records the compiled loop reads
+        (:mod:`flexlift.ascent.records`)
     hull, modes, plan : the structure (wet modes, all of them) and the lift plan
     mass_line : added plus entrained mass per length [kg/m]
     wet_weight : W' [N]
@@ -112,7 +66,10 @@ class Plant:
     neutral_volume: np.ndarray
     strip_x: np.ndarray
     strip_element: np.ndarray
-    arrays: PlantArrays
+    modal: Modal
+    strips: Strips
+    bags: Bags
+    seabed: Seabed
     hull: Hull
     modes: Modes
     plan: LiftPlan
@@ -129,11 +86,17 @@ class Plant:
 
     @property
     def nr(self) -> int:
-        return self.arrays.nr
+        return self.modal.nr
+
+    @property
+    def records(self) -> PlantRecords:
+        """The records the compiled loop reads."""
+        return PlantRecords(modal=self.modal, strips=self.strips, bags=self.bags,
+                            seabed=self.seabed)
 
     def initial_moles(self) -> np.ndarray:
         """Gas of every bag at the start [mol]: its neutral volume at the seabed's pressure."""
-        a = self.arrays
+        a = self.bags
         p = gas.ambient_pressure(0.0, a.water_depth, a.p_atm, a.rho_g)
         return gas.moles_of(self.neutral_volume, p, a.RT)
 
@@ -186,11 +149,12 @@ def bag_force_shapes(modes: Modes, plan: LiftPlan) -> np.ndarray:
 
 
 def gas_constants(scenario) -> dict:
-    """The gas and environment constants of a scenario, SI (bar to Pa)."""
-    env, g = scenario.environment, scenario.gas
+    """The gas laws' constants of a scenario, SI: R T [J/mol], the atmospheric pressure [Pa],
+    the water's weight density [N/m^3] and depth [m]."""
+    env = scenario.environment
     return dict(RT=gas.molar_energy(env.sea_temperature_K), p_atm=env.atmospheric_pressure_Pa,
                 rho_g=env.seawater_density_kg_m3 * env.gravity_m_s2,
-                water_depth=env.water_depth_m, purge_max=g.purge_rate_max_m3_s)
+                water_depth=env.water_depth_m)
 
 
 def static_correction(shape_p: np.ndarray, om2_e: np.ndarray, strip_gen: np.ndarray,
@@ -216,10 +180,56 @@ def wet_beam(scenario, hull: Hull):
     return assemble(hull, extra_mass_per_length=mass_line), mass_line
 
 
+@dataclass(frozen=True)
+class Layout:
+    """What the records of the coupled plant share: the strips and bag points on the modes.
+
+    xs, ws : (ns,) strip positions and quadrature weights [m]; el : (ns,) their elements
+    psi_s : (ns, m) mode shapes at the strips; strip_gen : (m, ns) generalised force per unit
+        strip line load [m]
+    wet_line : (ns,) wet weight per length at the strips [N/m]; weight_gen : (m,) the
+        generalised wet weight (point masses included) [N]
+    external, x_point, capacity : (nb,) the bags: parachute or not, point [m], capacity [m^3]
+    psi_p, dpsi_p : (nb, m) mode shapes and slopes at the bag points; psi_b : (nb, m)
+        generalised force per unit bag force
+    """
+
+    xs: np.ndarray
+    ws: np.ndarray
+    el: np.ndarray
+    psi_s: np.ndarray
+    strip_gen: np.ndarray
+    wet_line: np.ndarray
+    weight_gen: np.ndarray
+    external: np.ndarray
+    x_point: np.ndarray
+    capacity: np.ndarray
+    psi_p: np.ndarray
+    dpsi_p: np.ndarray
+    psi_b: np.ndarray
+
+
+@dataclass(frozen=True)
+class Holding:
+    """The seabed's hold of the coupled plant: strip_group (ns,), bag_group (nb,), ng groups,
+    their wet weights W_g [N] and shares of the suction frac [-], the holding shape at the
+    strips [-], the strips' holding line load per unit H of their group [1/m] and the shape's
+    (stern, bow) ratios."""
+
+    strip_group: np.ndarray
+    bag_group: np.ndarray
+    ng: int
+    W_g: np.ndarray
+    frac: np.ndarray
+    shape: np.ndarray
+    strip_hold: np.ndarray
+    stern_bow: tuple[float, float]
+
+
 def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = None) -> Plant:
     """The coupled plant of ``scenario``: the wet hull, its bags and its holding groups (one,
     or one per stage of a staged lift: :func:`holding_groups`)."""
-    env, hy = scenario.environment, scenario.hydro
+    env = scenario.environment
     hull = hull or hull_from_scenario(scenario)
     if plan is None:
         plan = plan_lift(scenario, hull)
@@ -231,67 +241,120 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     n_modes = min(beam.n_dof, max(MODES_FOR_CORRECTION, 2 + n_flex + 10))
     modes = compute_modes(beam, n_modes=n_modes)
     nr = min(2 + n_flex, modes.n_modes)
+    lay = layout(scenario, hull, plan, modes)
+    hold = holding(scenario, hull, plan, lay)
+    bags = plan.bags
+    return Plant(kind="coupled", names=tuple(b.name for b in bags), external=lay.external,
+                 x_point=lay.x_point, spans=tuple(b.span for b in bags),
+                 neutral_volume=neutral_volumes(lay.external, lay.capacity, hold.W_g, rho * g,
+                                                hold.bag_group),
+                 strip_x=lay.xs, strip_element=lay.el,
+                 modal=modal_record(scenario, hull, modes, nr, lay),
+                 strips=strip_record(scenario, hull, nr, lay, hold),
+                 bags=bag_record(scenario, hull, modes, nr, lay, hold),
+                 seabed=seabed_record(scenario, plan, nr, lay, hold), hull=hull, modes=modes,
+                 plan=plan,
+                 mass_line=mass_line, wet_weight=plan.wet_weight, hold_stern_bow=hold.stern_bow,
+                 gravity=g, seawater_density=rho, steel_density=env.steel_density_kg_m3)
+
+
+def layout(scenario, hull: Hull, plan: LiftPlan, modes: Modes) -> Layout:
+    """The strips and bag points of ``hull`` and ``plan`` on ``modes`` (all of them)."""
+    env = scenario.environment
+    rho, g, rho_s = env.seawater_density_kg_m3, env.gravity_m_s2, env.steel_density_kg_m3
     xs, ws = strip_points(hull)
     psi_s = modes.shape_at(xs)  # (ns, m)
     bags = plan.bags
-    nb = len(bags)
     external = np.array([b.kind == "external" for b in bags])
     x_point = np.array([b.x for b in bags], dtype=float)
-    psi_p, dpsi_p = modes.shape_at(x_point), slope_at(modes, x_point)
-    psi_b = bag_force_shapes(modes, plan)
-    capacity = np.array([b.capacity for b in bags])
-    rho_s = env.steel_density_kg_m3
     el = hull.element_of(xs)
     strip_gen = (psi_s * ws[:, None]).T  # (m, ns)
     wet_line = hull.wet_weight_per_length(g, rho, rho_s)[el]  # at the strips [N/m]
     weight_gen = -(strip_gen @ wet_line
                    + modes.displacement.T @ hull.point_wet_weights(g, rho, rho_s))
-    sb = scenario.seabed
+    return Layout(xs=xs, ws=ws, el=el, psi_s=psi_s, strip_gen=strip_gen, wet_line=wet_line,
+                  weight_gen=weight_gen, external=external, x_point=x_point,
+                  capacity=np.array([b.capacity for b in bags]), psi_p=modes.shape_at(x_point),
+                  dpsi_p=slope_at(modes, x_point), psi_b=bag_force_shapes(modes, plan))
+
+
+def holding(scenario, hull: Hull, plan: LiftPlan, lay: Layout) -> Holding:
+    """The holding groups of the seabed's suction, their weights and shares."""
+    env, sb = scenario.environment, scenario.seabed
+    rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
     stern, bow = (sb.stern_ratio, sb.bow_ratio) if sb.holding_shape == "linear" else (1.0, 1.0)
-    shape = seabed.holding_shape(xs, hull.length, stern, bow)
-    H0 = (scenario.lift.breakout_factor - 1.0) * plan.wet_weight
-    strip_group, bag_group, ng = holding_groups(scenario, [b.name for b in bags], x_point,
-                                                external, xs)
-    W_g, frac = stretch_shares(strip_group, ng, xs, ws * wet_line, ws * shape, hull,
-                               hull.point_wet_weights(g, rho, rho_s), plan.wet_weight)
+    shape = seabed.holding_shape(lay.xs, hull.length, stern, bow)
+    strip_group, bag_group, ng = holding_groups(scenario, [b.name for b in plan.bags],
+                                                lay.x_point, lay.external, lay.xs)
+    W_g, frac = stretch_shares(strip_group, ng, lay.xs, lay.ws * lay.wet_line, lay.ws * shape,
+                               hull, hull.point_wet_weights(g, rho, env.steel_density_kg_m3),
+                               plan.wet_weight)
     hold_s = shape / frac[strip_group]  # per unit H of the strip's own group
-    ns = xs.size
-    cs, cb, cw = static_correction(psi_p[:, nr:], modes.omega[nr:] ** 2, strip_gen[nr:],
-                                   psi_b[:, nr:].T, weight_gen[nr:])
-    ss, sbg, sw = static_correction(dpsi_p[:, nr:], modes.omega[nr:] ** 2, strip_gen[nr:],
-                                    psi_b[:, nr:].T, weight_gen[nr:])
-    top = hull.depth + np.where(external, hydro.sphere_diameter(capacity), 0.0)
+    return Holding(strip_group=strip_group, bag_group=bag_group, ng=ng, W_g=W_g, frac=frac,
+                   shape=shape, strip_hold=hold_s, stern_bow=(stern, bow))
+
+
+def modal_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout) -> Modal:
+    """The ``nr`` retained modes' mechanics, weight and the hull's heave and pitch rows."""
     pitch_row = np.zeros(nr)
     pitch_row[1] = float(slope_at(modes, [0.5 * hull.length])[0, 1])
     heave_row = np.zeros(nr)
-    heave_row[0] = float(psi_s[0, 0])
+    heave_row[0] = float(lay.psi_s[0, 0])
+    return Modal(nr=nr, omega2=modes.omega[:nr] ** 2,
+                 damping=2.0 * scenario.hull.modal_damping * modes.omega[:nr],
+                 weight_force=lay.weight_gen[:nr].copy(), pitch_row=pitch_row,
+                 heave_row=heave_row)
+
+
+def strip_record(scenario, hull: Hull, nr: int, lay: Layout, hold: Holding) -> Strips:
+    """The strips: their motion and generalised force, drag, seabed contact and hold."""
+    rho, hy, sb = scenario.environment.seawater_density_kg_m3, scenario.hydro, scenario.seabed
+    ns = lay.xs.size
+    return Strips(
+        ns=ns, shape=np.ascontiguousarray(lay.psi_s[:, :nr]),
+        force=np.ascontiguousarray(lay.strip_gen[:nr]), weight=lay.ws,
+        drag=np.full(ns, hydro.drag_coefficient(rho, hy.drag_coefficient, hull.breadth)),
+        contact_k=np.full(ns, sb.contact_stiffness_N_m2),
+        contact_c=np.full(ns, sb.contact_damping_Ns_m2), group=hold.strip_group,
+        hold=hold.strip_hold)
+
+
+def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
+               hold: Holding) -> Bags:
+    """The bags: their points on the retained modes, their gas and its laws' constants, drag
+    and the static correction of the eliminated modes at their points."""
+    rho, hy = scenario.environment.seawater_density_kg_m3, scenario.hydro
+    external, capacity, psi_p, dpsi_p, psi_b = (lay.external, lay.capacity, lay.psi_p,
+                                                lay.dpsi_p, lay.psi_b)
+    nb = external.size
+    om2_e, strip_e, bag_e, weight_e = (modes.omega[nr:] ** 2, lay.strip_gen[nr:],
+                                       psi_b[:, nr:].T, lay.weight_gen[nr:])
+    cs, cb, cw = static_correction(psi_p[:, nr:], om2_e, strip_e, bag_e, weight_e)
+    ss, sbg, sw = static_correction(dpsi_p[:, nr:], om2_e, strip_e, bag_e, weight_e)
     relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)
-    arrays = PlantArrays(
-        nr=nr, nb=nb, ns=ns, ng=ng,
-        omega2=modes.omega[:nr] ** 2, damping=2.0 * scenario.hull.modal_damping * modes.omega[:nr],
-        strip_shape=np.ascontiguousarray(psi_s[:, :nr]),
-        strip_force=np.ascontiguousarray(strip_gen[:nr]), strip_weight=ws,
-        strip_drag=np.full(ns, hydro.drag_coefficient(rho, hy.drag_coefficient, hull.breadth)),
-        strip_k=np.full(ns, sb.contact_stiffness_N_m2), strip_c=np.full(ns, sb.contact_damping_Ns_m2),
-        strip_group=strip_group, strip_hold=hold_s,
-        hold_force=-np.stack([strip_gen[:nr] @ (hold_s * (strip_group == k)) for k in range(ng)],
-                             axis=1),
-        H0=H0 * frac, group_weight=W_g,
-        breakout_time=sb.breakout_time_s, release_time=sb.release_time_s,
-        bag_shape=np.ascontiguousarray(psi_p[:, :nr]), bag_slope=np.ascontiguousarray(dpsi_p[:, :nr]),
-        bag_force=np.ascontiguousarray(psi_b[:, :nr].T), bag_group=bag_group,
-        capacity=capacity, relief=relief, top_offset=top,
-        bag_drag=np.where(external, hydro.drag_coefficient(
+    return Bags(
+        nb=nb, shape=np.ascontiguousarray(psi_p[:, :nr]),
+        slope=np.ascontiguousarray(dpsi_p[:, :nr]), force=np.ascontiguousarray(psi_b[:, :nr].T),
+        group=hold.bag_group, capacity=capacity, relief=relief,
+        top_offset=hull.depth + np.where(external, hydro.sphere_diameter(capacity), 0.0),
+        drag=np.where(external, hydro.drag_coefficient(
             rho, hy.bag_drag_coefficient, 1.0) * hydro.sphere_frontal_area(capacity), 0.0),
-        weight_force=weight_gen[:nr].copy(), pitch_row=pitch_row, heave_row=heave_row,
-        corr_strip=cs, corr_bag=cb, corr_weight=cw, slope_strip=ss, slope_bag=sbg, slope_weight=sw,
-        liftoff_clearance=LIFTOFF_CLEARANCE, **gas_constants(scenario))
-    return Plant(kind="coupled", names=tuple(b.name for b in bags), external=external,
-                 x_point=x_point, spans=tuple(b.span for b in bags),
-                 neutral_volume=neutral_volumes(external, capacity, W_g, rho * g, bag_group),
-                 strip_x=xs, strip_element=el, arrays=arrays, hull=hull, modes=modes, plan=plan,
-                 mass_line=mass_line, wet_weight=plan.wet_weight, hold_stern_bow=(stern, bow),
-                 gravity=g, seawater_density=rho, steel_density=rho_s)
+        purge_max=scenario.gas.purge_rate_max_m3_s, **gas_constants(scenario),
+        corr_strip=cs, corr_bag=cb, corr_weight=cw, slope_strip=ss, slope_bag=sbg,
+        slope_weight=sw)
+
+
+def seabed_record(scenario, plan: LiftPlan, nr: int, lay: Layout, hold: Holding) -> Seabed:
+    """The holding groups: their generalised force, initial hold and wet weight."""
+    sb = scenario.seabed
+    H0 = (scenario.lift.breakout_factor - 1.0) * plan.wet_weight
+    hold_s, sg = hold.strip_hold, hold.strip_group
+    return Seabed(
+        ng=hold.ng,
+        hold_force=-np.stack([lay.strip_gen[:nr] @ (hold_s * (sg == k)) for k in range(hold.ng)],
+                             axis=1),
+        H0=H0 * hold.frac, group_weight=hold.W_g, breakout_time=sb.breakout_time_s,
+        release_time=sb.release_time_s, liftoff_clearance=LIFTOFF_CLEARANCE)
 
 
 #: the range of ``simulation.retained_flexible_modes: auto``
@@ -377,7 +440,7 @@ def check_neutral(plant: Plant) -> None:
     V = plant.neutral_volume
     ext = plant.external
     to_t = plant.seawater_density / C.TONNE  # m^3 of displaced water -> tonnes of lift
-    cap = plant.arrays.capacity
+    cap = plant.bags.capacity
     if not ext.any() or np.any(V < -1e-9):
         internal_t = float(cap[~ext].sum()) * to_t
         raise InputError(

@@ -21,80 +21,83 @@ from flexlift.physics.gas import purge_flow
 
 
 @jit
-def log_event(rec, t, code, index, value):
+def log_event(recorder, t, code, index, value):
     """Append an event (time [s], code, bag or group index or -1, a value)."""
-    k = rec.counts[2]
+    k = recorder.counts[2]
     if k < MAX_EVENTS:
-        rec.ev_t[k], rec.ev_code[k], rec.ev_index[k], rec.ev_value[k] = t, code, index, value
-        rec.counts[2] = k + 1
+        recorder.ev_t[k], recorder.ev_code[k] = t, code
+        recorder.ev_index[k], recorder.ev_value[k] = index, value
+        recorder.counts[2] = k + 1
 
 
 @jit
-def store_row(t, A, C, S, R, W, rec):
+def store_row(t, plant, controllers, control_state, state, switches, recorder):
     """One output row of the current state (after :func:`flexlift.ascent.mechanics.
     strip_loads` and the bag forces of this step)."""
-    r = rec.counts[0]
-    if r >= rec.t.size:
+    r = recorder.counts[0]
+    if r >= recorder.t.size:
         return
-    line = R.line + R.contact
-    z = R.z + A.corr_weight  # plus the static correction of the eliminated modes
-    matvec_add(A.corr_strip, line, z)
-    matvec_add(A.corr_bag, R.point, z)
-    slope = matvec(A.bag_slope, R.q, np.empty(A.nb)) + A.slope_weight
-    matvec_add(A.slope_strip, line, slope)
-    matvec_add(A.slope_bag, R.point, slope)
-    rate = matvec(A.bag_slope, R.v, np.empty(A.nb))
-    nb = A.nb
-    out = rec.bag[r]
+    line = state.line + state.contact
+    z = state.z + plant.bags.corr_weight  # plus the static correction of the eliminated modes
+    matvec_add(plant.bags.corr_strip, line, z)
+    matvec_add(plant.bags.corr_bag, state.point, z)
+    slope = matvec(plant.bags.slope, state.q, np.empty(plant.bags.nb)) + plant.bags.slope_weight
+    matvec_add(plant.bags.slope_strip, line, slope)
+    matvec_add(plant.bags.slope_bag, state.point, slope)
+    rate = matvec(plant.bags.slope, state.v, np.empty(plant.bags.nb))
+    nb = plant.bags.nb
+    out = recorder.bag[r]
     out[:, :] = np.nan
     for i in range(nb):
-        fill = R.fill[i] * W.supply[i]
-        purge = purge_flow(R.opening[i], R.V[i], A.capacity[i], A.purge_max)
-        out[0, i], out[1, i], out[2, i], out[3, i] = z[i], R.zd[i], slope[i], rate[i]
-        out[4, i], out[5, i], out[6, i], out[7, i] = fill - purge, R.V[i], R.point[i], fill
-    for k in range(C.bags.size):
-        i = C.bags[k]
-        out[8, i], out[9, i], out[10, i], out[11, i] = (R.opening[i], S.u[k], S.V_d[k],
-                                                       S.z_ref[k])
+        fill = state.fill[i] * switches.supply[i]
+        purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],
+                           plant.bags.purge_max)
+        out[0, i], out[1, i], out[2, i], out[3, i] = z[i], state.zd[i], slope[i], rate[i]
+        out[4, i], out[5, i], out[6, i], out[7, i] = (fill - purge, state.V[i], state.point[i],
+                                                      fill)
+    for k in range(controllers.bags.size):
+        i = controllers.bags[k]
+        out[8, i], out[9, i] = state.opening[i], control_state.u[k]
+        out[10, i], out[11, i] = control_state.V_d[k], control_state.z_ref[k]
     uplift = 0.0
-    for g in range(A.ng):
-        uplift += group_uplift(A, R.V, W.attached, g)
+    for g in range(plant.seabed.ng):
+        uplift += group_uplift(plant, state.V, switches.attached, g)
     contact = 0.0
-    for s in range(A.ns):
-        contact += R.contact[s] * A.strip_weight[s]
-    rec.hull[r, 0] = dot(A.heave_row, R.q)
-    rec.hull[r, 1] = math.atan(dot(A.pitch_row, R.q))
-    rec.hull[r, 2] = R.H.sum()
-    rec.hull[r, 3] = uplift
-    rec.hull[r, 4] = contact
-    rec.t[r] = t
-    rec.counts[0] = r + 1
+    for s in range(plant.strips.ns):
+        contact += state.contact[s] * plant.strips.weight[s]
+    recorder.hull[r, 0] = dot(plant.modal.heave_row, state.q)
+    recorder.hull[r, 1] = math.atan(dot(plant.modal.pitch_row, state.q))
+    recorder.hull[r, 2] = state.H.sum()
+    recorder.hull[r, 3] = uplift
+    recorder.hull[r, 4] = contact
+    recorder.t[r] = t
+    recorder.counts[0] = r + 1
 
 
 @jit
-def group_uplift(A, V, attached, g):
+def group_uplift(plant, V, attached, g):
     """Net uplift U_g of holding group ``g`` [N]: its bags' buoyancy minus its wet weight."""
     total = 0.0
     for i in range(V.size):
-        if A.bag_group[i] == g:
-            total += A.rho_g * V[i] * attached[i]
-    return total - A.group_weight[g]
+        if plant.bags.group[i] == g:
+            total += plant.bags.rho_g * V[i] * attached[i]
+    return total - plant.seabed.group_weight[g]
 
 
 @jit
-def store_snapshot(t, A, R, W, noise, rec):
+def store_snapshot(t, plant, state, switches, noise, recorder):
     """A strength snapshot of the current state (``noise`` the strip noise of this step)."""
-    k = rec.counts[1]
-    if k >= rec.snap_t.size:
+    k = recorder.counts[1]
+    if k >= recorder.snap_t.size:
         return
-    rec.snap_t[k] = t
-    rec.snap_q[k] = R.q
-    rec.snap_v[k] = R.v
-    rec.snap_a[k] = accelerations(A, R.q, R.v, R.b, R.contact)
-    rec.snap_H[k] = R.H
-    rec.snap_sep[k] = R.sep
-    rec.snap_V[k] = R.V
-    rec.snap_attached[k] = W.attached
-    rec.snap_current[k] = W.current[0]
-    rec.snap_noise[k] = noise
-    rec.counts[1] = k + 1
+    recorder.snap_t[k] = t
+    recorder.snap_q[k] = state.q
+    recorder.snap_v[k] = state.v
+    recorder.snap_a[k] = accelerations(plant, state.q, state.v, state.b, state.contact)
+    recorder.snap_H[k] = state.H
+    recorder.snap_sep[k] = state.sep
+    recorder.snap_V[k] = state.V
+    recorder.snap_attached[k] = switches.attached
+    recorder.snap_current[k] = switches.current[0]
+    recorder.snap_noise[k] = noise
+    recorder.counts[1] = k + 1

@@ -143,7 +143,7 @@ def _r(v, nd=3):
 
 def event_list(run) -> list[dict]:
     """The run's events (compiled loop and faults) in time order, with names and details."""
-    rec, P, X = run.rec, run.plant, run.X
+    rec, P, X = run.recorder, run.plant, run.settings
     g_t = P.gravity * C.TONNE
     out = []
     for k in range(int(rec.counts[2])):
@@ -173,7 +173,7 @@ def event_list(run) -> list[dict]:
 
 def snapshots(run) -> dict:
     """The strength snapshots of a run, stacked over time (copies), by name."""
-    rec = run.rec
+    rec = run.recorder
     n = int(rec.counts[1])
     return {"t": rec.snap_t[:n].copy(), "q": rec.snap_q[:n].copy(), "v": rec.snap_v[:n].copy(),
             "a": rec.snap_a[:n].copy(), "H": rec.snap_H[:n].copy(), "sep": rec.snap_sep[:n].copy(),
@@ -186,7 +186,7 @@ def build_result(run, error: str | None) -> Result:
     from flexlift.ascent.strength import seabed_profile, strength
     from flexlift.physics.gas import buoyancy
 
-    P, rec, R = run.plant, run.rec, run.R
+    P, rec, R = run.plant, run.recorder, run.state
     nrow = int(rec.counts[0])
     t = rec.t[:nrow].copy()
     coords = {"time": ("time", t, {"units": "s", "long_name": "time since filling began"}),
@@ -194,7 +194,7 @@ def build_result(run, error: str | None) -> Result:
     data = {}
     for j, (name, (unit, long)) in enumerate(BAG_VARS.items()):
         data[name] = (("time", "bag"), rec.bag[:nrow, j, :].copy(), {"units": unit, "long_name": long})
-    data["buoyancy"] = (("time", "bag"), buoyancy(rec.bag[:nrow, 5, :], P.arrays.rho_g),
+    data["buoyancy"] = (("time", "bag"), buoyancy(rec.bag[:nrow, 5, :], P.bags.rho_g),
                         {"units": "N", "long_name": "buoyancy of the bag's gas, rho g V"})
     for j, (name, (unit, long)) in enumerate(HULL_VARS.items()):
         data[name] = (("time",), rec.hull[:nrow, j].copy(), {"units": unit, "long_name": long})
@@ -259,13 +259,13 @@ def section_modulus(scenario, x) -> np.ndarray:
 
 def _initial_free_air(P) -> np.ndarray:
     """Each bag's gas at the start as free air at the surface [m^3] (n R T / p_atm)."""
-    return P.initial_moles() * P.arrays.RT / P.arrays.p_atm
+    return P.initial_moles() * P.bags.RT / P.bags.p_atm
 
 
 def gas_budget(run) -> dict:
     """The whole gas budget [m^3] and the supply time (headline keys): the initial fill, the
     top-up during the run, the vented and purged gas, as free air and at local pressure."""
-    R, P, sc = run.R, run.plant, run.scenario
+    R, P, sc = run.state, run.plant, run.scenario
     init_free, init_local = _initial_free_air(P), P.neutral_volume
     q_in = sc.gas.fill_rate_max_m3_s
     local = init_local + R.gas_local  # filled at local pressure, per bag
@@ -283,7 +283,7 @@ def gas_budget(run) -> dict:
 
 
 def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
-    sc, R, P = run.scenario, run.R, run.plant
+    sc, R, P = run.scenario, run.state, run.plant
     vmax, pmax, vdown = float(R.scalars[0]), float(R.scalars[1]), float(R.scalars[4])
     kinds = {e["kind"] for e in events}
     crit = {"ascent_velocity": vmax < sc.limits.ascent_velocity_m_s,
@@ -430,7 +430,7 @@ def explain(run, events, crit, vmax: float, vdown: float, pmax: float, error) ->
         out["no_resettle"] = (f"{_fault_before(events, e['time_s'])}the hull touched the seabed "
                               f"again at {e['time_s']:.0f} s")
     if not crit["reached_target"]:
-        end = float(run.rec.t[max(int(run.rec.counts[0]) - 1, 0)])
+        end = float(run.recorder.t[max(int(run.recorder.counts[0]) - 1, 0)])
         if error:
             out["reached_target"] = f"the run stopped at {end:.0f} s: {error}"
         elif first("surface_breach"):
@@ -439,13 +439,13 @@ def explain(run, events, crit, vmax: float, vdown: float, pmax: float, error) ->
             out["reached_target"] = ("never separated in the "
                                      f"{end:,.0f} s run: {breakout_check(sc, run.plant).message}")
         else:  # (a run that kept every limit has its outcome's cause here instead)
-            att = np.asarray(run.W.attached) > 0
-            n, N = int(np.count_nonzero(np.isfinite(run.R.arrival) & att)), int(att.sum())
+            att = np.asarray(run.switches.attached) > 0
+            n, N = int(np.count_nonzero(np.isfinite(run.state.arrival) & att)), int(att.sum())
             tol = f"±{lim.arrival_tolerance_m:g} m of the target"
             out["reached_target"] = (
                 f"separated at {first('separation')['time_s']:.0f} s; "
                 + (f"every bag arrived within {tol}, but they did not hold there for "
-                   f"{run.X.hold_time:.0f} s" if n == N and N else
+                   f"{run.settings.hold_time:.0f} s" if n == N and N else
                    f"{n} of the {N} bags arrived within {tol}, the others did not" if n else
                    f"no bag arrived within {tol}")
                 + f" by the end of the {end:,.0f} s run")

@@ -45,7 +45,7 @@ CHUNK_VALUES = 32_768
 def strip_cells(plant) -> np.ndarray:
     """Edges [m] (ns + 1,) of the strips' cells: each strip's quadrature weight laid end to
     end from the aft end."""
-    return np.concatenate([[0.0], np.cumsum(plant.arrays.strip_weight)])
+    return np.concatenate([[0.0], np.cumsum(plant.strips.weight)])
 
 
 def strength_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -57,7 +57,7 @@ def strength_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     hull = plant.hull
     L = hull.length
     n_out = min(8 * hull.n_elements, MAX_POINTS - 1)
-    n_half_waves = plant.arrays.nr - 1  # the highest flexible mode's (n + 1 nodes)
+    n_half_waves = plant.modal.nr - 1  # the highest flexible mode's (n + 1 nodes)
     refine = int(np.clip(math.ceil(POINTS_PER_HALF_WAVE * n_half_waves / n_out), 1, MAX_REFINE))
     base = np.linspace(0.0, L, n_out * refine + 1)
     spans = {float(e) for s in plant.spans if s is not None for e in s if 0 < e < L}
@@ -88,18 +88,18 @@ class _Grid:
 
     @classmethod
     def of(cls, plant, xe: np.ndarray) -> _Grid:
-        a, hull = plant.arrays, plant.hull
+        hull = plant.hull
         el = hull.element_of(xe)
         m = hull.mass_per_length[el]
         xs = plant.strip_x
         edges = strip_cells(plant)
         cell = np.clip(np.searchsorted(edges, xe, side="right") - 1, 0, xs.size - 1)
-        mid, wid = 0.5 * (edges[cell] + edges[cell + 1]), a.strip_weight[cell]
+        mid, wid = 0.5 * (edges[cell] + edges[cell + 1]), plant.strips.weight[cell]
         spread = 1.0 + 12.0 * (xs[cell] - mid) * (xe - mid) / wid**2  # centroid at the strip
-        return cls(plant.modes.shape_at(xe)[:, : a.nr],
+        return cls(plant.modes.shape_at(xe)[:, : plant.modal.nr],
                    hull.wet_weight_per_length(plant.gravity, plant.seawater_density,
                                               plant.steel_density)[el],
-                   m + plant.mass_line, np.interp(xe, xs, a.strip_drag), cell, spread)
+                   m + plant.mass_line, np.interp(xe, xs, plant.strips.drag), cell, spread)
 
 
 def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) -> np.ndarray:
@@ -107,7 +107,6 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
     ``snaps`` holds the snapshot arrays stacked over time (see
     :func:`flexlift.ascent.result.snapshots`)."""
     G = grid or _Grid.of(plant, xe)
-    a = plant.arrays
     v, acc = snaps["v"] @ G.psi.T, snaps["a"] @ G.psi.T
     q = -G.weight - G.mass * acc
     q += hydro.drag(v - snaps["current"][:, None], G.drag)
@@ -116,7 +115,7 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
         q += np.array([np.interp(xe, plant.strip_x, row) for row in snaps["noise"]])
     for i, span in enumerate(plant.spans):
         if span is not None:
-            lift = gas.buoyancy(snaps["V"][:, i], a.rho_g) * snaps["attached"][:, i]
+            lift = gas.buoyancy(snaps["V"][:, i], plant.bags.rho_g) * snaps["attached"][:, i]
             inside = (xe >= span[0]) & (xe <= span[1])
             q += np.outer(lift / (span[1] - span[0]), inside)
     return q
@@ -125,24 +124,23 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
 def seabed_loads(plant, snaps: dict) -> np.ndarray:
     """Line loads [N/m] (nt, ns) of the seabed at the loop's strips in every snapshot: the
     contact (tension-capable where the strip's group is held) and the released suction."""
-    a = plant.arrays
-    w, v = snaps["q"] @ a.strip_shape.T, snaps["v"] @ a.strip_shape.T
-    held = ~snaps["sep"][:, a.strip_group]
-    q = seabed.contact_load(w, v, a.strip_k, a.strip_c, held)
-    return q - np.where(held, 0.0, snaps["H"][:, a.strip_group] * a.strip_hold)
+    w, v = snaps["q"] @ plant.strips.shape.T, snaps["v"] @ plant.strips.shape.T
+    held = ~snaps["sep"][:, plant.strips.group]
+    q = seabed.contact_load(w, v, plant.strips.contact_k, plant.strips.contact_c, held)
+    return q - np.where(held, 0.0, snaps["H"][:, plant.strips.group] * plant.strips.hold)
 
 
 def point_loads(plant, snaps: dict) -> list[tuple[float, np.ndarray]]:
     """(x [m], force [N] per snapshot) of the external bags and the point masses."""
-    a, hull = plant.arrays, plant.hull
+    hull = plant.hull
     out = []
-    zd = snaps["v"] @ a.bag_shape.T  # (nt, nb) bag speeds
+    zd = snaps["v"] @ plant.bags.shape.T  # (nt, nb) bag speeds
     for i in np.flatnonzero(plant.external):
-        F = (gas.buoyancy(snaps["V"][:, i], a.rho_g)
-             + hydro.drag(zd[:, i] - snaps["current"], a.bag_drag[i])) * snaps["attached"][:, i]
+        F = (gas.buoyancy(snaps["V"][:, i], plant.bags.rho_g)
+             + hydro.drag(zd[:, i] - snaps["current"], plant.bags.drag[i])) * snaps["attached"][:, i]
         out.append((float(plant.x_point[i]), F))
     if np.any(hull.point_masses > 0):
-        acc = snaps["a"] @ plant.modes.displacement[:, : a.nr].T
+        acc = snaps["a"] @ plant.modes.displacement[:, : plant.modal.nr].T
         for j, mp in enumerate(hull.point_masses):
             if mp > 0:
                 wt = hydro.submerged_weight(mp, plant.gravity, plant.seawater_density,
@@ -177,15 +175,14 @@ def seabed_profile(plant, snaps: dict) -> dict:
     ``slope`` (nt, nx) [rad]."""
     from flexlift.ascent.plant import slope_at
 
-    a = plant.arrays
-    w = snaps["q"] @ a.strip_shape.T  # (nt, ns), as the loop sees the strips
-    grounded = (w < a.liftoff_clearance) | ~snaps["sep"][:, a.strip_group]
+    w = snaps["q"] @ plant.strips.shape.T  # (nt, ns), as the loop sees the strips
+    grounded = (w < plant.seabed.liftoff_clearance) | ~snaps["sep"][:, plant.strips.group]
     xs = plant.strip_x
     any_ = grounded.any(axis=1)
     first = np.where(any_, xs[np.argmax(grounded, axis=1)], np.nan)
     last = np.where(any_, xs[xs.size - 1 - np.argmax(grounded[:, ::-1], axis=1)], np.nan)
     x, _, keep = strength_grid(plant)
     x = x[keep]
-    slope = np.arctan(snaps["q"] @ slope_at(plant.modes, x)[:, : a.nr].T)  # the angle
+    slope = np.arctan(snaps["q"] @ slope_at(plant.modes, x)[:, : plant.modal.nr].T)  # the angle
     return {"grounded_from": first, "grounded_to": last,
-            "grounded_length": grounded @ a.strip_weight, "x": x, "slope": slope}
+            "grounded_length": grounded @ plant.strips.weight, "x": x, "slope": slope}

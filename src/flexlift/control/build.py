@@ -45,13 +45,13 @@ def shaped_pull(total: float, x_bags, x_centroid: float) -> np.ndarray:
 
 def planned_profile(scenario, plant):
     """The valve-limited planned ascent of ``plant``'s external bags (None: the trapezoid)."""
-    c, a = scenario.control, plant.arrays
+    c = scenario.control
     bags = np.flatnonzero(plant.external)
     if not bags.size:
         return None
     return valve_profile(c.target_height_m, c.ascent_speed_m_s, c.ascent_acceleration_m_s2,
-                         plant.neutral_volume[bags], a.capacity[bags], a.purge_max,
-                         c.purge_margin, a.water_depth, a.p_atm, a.rho_g)
+                         plant.neutral_volume[bags], plant.bags.capacity[bags], plant.bags.purge_max,
+                         c.purge_margin, plant.bags.water_depth, plant.bags.p_atm, plant.bags.rho_g)
 
 
 def _stamp(path: str | None, key: str):
@@ -139,15 +139,14 @@ def bag_pulls(scenario, plant, mode: str = "decentralized") -> np.ndarray:
     """The breakout pull of each of ``plant``'s external bags as gas volume [m^3]: the pull of
     :func:`breakout_pull` shaped so that its resultant sits on the suction's centroid
     (``control.shape_breakout_pull``, coupled plant, closed-loop modes), else equal shares."""
-    a = plant.arrays
     x = plant.x_point[np.flatnonzero(plant.external)]
-    pull = breakout_pull(scenario, float(a.H0.sum())) / a.rho_g  # [m^3]
+    pull = breakout_pull(scenario, float(plant.seabed.H0.sum())) / plant.bags.rho_g  # [m^3]
     if not x.size:
         return np.zeros(0)
     if (mode in ("coordinated", "decentralized") and scenario.control.shape_breakout_pull
             and plant.kind == "coupled"):
-        share = (a.H0 / a.H0.sum())[a.strip_group] if a.H0.sum() > 0 else 1.0 / a.ng
-        hold_centroid = float(np.sum(a.strip_weight * a.strip_hold * share * plant.strip_x))
+        share = (plant.seabed.H0 / plant.seabed.H0.sum())[plant.strips.group] if plant.seabed.H0.sum() > 0 else 1.0 / plant.seabed.ng
+        hold_centroid = float(np.sum(plant.strips.weight * plant.strips.hold * share * plant.strip_x))
         return shaped_pull(pull, x, hold_centroid)
     return np.full(x.size, pull / max(x.size, 1))
 
@@ -156,7 +155,6 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
                    ) -> tuple[ControlArrays, ControlState]:
     """Constants and memory of the controllers of ``plant``'s external bags in ``mode``."""
     c = scenario.control
-    a = plant.arrays
     bags = np.flatnonzero(plant.external)
     x = plant.x_point[bags]
     V_pull = bag_pulls(scenario, plant, mode)
@@ -168,7 +166,7 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
         mode=MODE_CODES[mode], bags=bags.astype(np.int64), period=1.0 / c.sample_rate_Hz,
         target=c.target_height_m, speed=c.ascent_speed_m_s, accel=c.ascent_acceleration_m_s2,
         lever=(x - x.mean()) / (half or 1.0), x=x, V_neutral=plant.neutral_volume[bags].copy(),
-        V_pull=V_pull, dV_max=s.volume_authority * a.capacity[bags],
+        V_pull=V_pull, dV_max=s.volume_authority * plant.bags.capacity[bags],
         e_scale=s.error_scale_m, r_scale=s.rate_scale_m_s, lam=c.fill.slope_1_s,
         d_scale=c.fill.distance_scale_m3_s, kp=c.purge.kp_1_m3, ki=c.purge.ki_1_m3s,
         kd=c.purge.kd_s_m3, fill_max=scenario.gas.fill_rate_max_m3_s,

@@ -140,192 +140,212 @@ def new_state(nc: int) -> ControlState:
 
 
 @jit
-def observe(t, z, zd, separated, C, S):
+def observe(t, z, zd, separated, controllers, control_state):
     """Filter the measurements, note separations, form the reference and the supervisor's
-    inputs (into ``S.e_in``, ``S.r_in``, ``S.z_ref``). ``z``, ``zd`` (nc,) measured heights
-    [m] and speeds [m/s]; ``separated`` (nc,) bool, the hold of each bag has let go."""
+    inputs (into ``control_state``: ``e_in``, ``r_in``, ``z_ref``). ``z``, ``zd`` (nc,)
+    measured heights [m] and speeds [m/s]; ``separated`` (nc,) bool, the hold of each bag has
+    let go. ``controllers``: their constants (:class:`ControlArrays`); ``control_state``: their
+    memory (:class:`ControlState`)."""
     nc = z.size
-    if not S.flags[0]:
-        S.z_f[:] = z
-        S.zd_f[:] = zd
-    elif C.filter_time > 0.0:
-        a = 1.0 - math.exp(-C.period / C.filter_time)
-        S.z_f[:] += a * (z - S.z_f)
-        S.zd_f[:] += a * (zd - S.zd_f)
+    if not control_state.flags[0]:
+        control_state.z_f[:] = z
+        control_state.zd_f[:] = zd
+    elif controllers.filter_time > 0.0:
+        a = 1.0 - math.exp(-controllers.period / controllers.filter_time)
+        control_state.z_f[:] += a * (z - control_state.z_f)
+        control_state.zd_f[:] += a * (zd - control_state.zd_f)
     else:
-        S.z_f[:] = z
-        S.zd_f[:] = zd
+        control_state.z_f[:] = z
+        control_state.zd_f[:] = zd
     for i in range(nc):
-        S.started[i] = t >= C.start[i] - 1e-9
-        if separated[i] and math.isnan(S.t_free[i]):
-            S.t_free[i] = t
-    _note_separations(t, separated, C, S)
+        control_state.started[i] = t >= controllers.start[i] - 1e-9
+        if separated[i] and math.isnan(control_state.t_free[i]):
+            control_state.t_free[i] = t
+    _note_separations(t, separated, controllers, control_state)
     for i in range(nc):
-        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
-            S.z_ref[i], S.zd_ref[i], S.e_in[i], S.r_in[i] = 0.0, 0.0, 0.0, 0.0
+        if math.isnan(control_state.t_sep[i]) or controllers.mode == OPEN_LOOP:
+            control_state.z_ref[i], control_state.zd_ref[i] = 0.0, 0.0
+            control_state.e_in[i], control_state.r_in[i] = 0.0, 0.0
             continue
-        pos, vel = reference(t - S.t_sep[i], C.target - S.z0[i], C)
-        S.z_ref[i], S.zd_ref[i] = S.z0[i] + pos, vel
-        S.e_in[i] = min(max((S.z_ref[i] - S.z_f[i]) / C.e_scale, -1.0), 1.0)
-        S.r_in[i] = min(max((vel - S.zd_f[i]) / C.r_scale, -1.0), 1.0)
-        if S.active[i] and C.k_height > 0.0 and abs(S.e_in[i]) < ADAPT_BAND:
-            lim = C.dV_max[i]
-            S.adapt[i] = min(max(S.adapt[i] + C.period * C.k_height * (S.z_ref[i] - S.z_f[i]),
-                                 -lim), lim)
+        pos, vel = reference(t - control_state.t_sep[i], controllers.target - control_state.z0[i],
+                             controllers)
+        control_state.z_ref[i], control_state.zd_ref[i] = control_state.z0[i] + pos, vel
+        e = (control_state.z_ref[i] - control_state.z_f[i]) / controllers.e_scale
+        control_state.e_in[i] = min(max(e, -1.0), 1.0)
+        r = (vel - control_state.zd_f[i]) / controllers.r_scale
+        control_state.r_in[i] = min(max(r, -1.0), 1.0)
+        if (control_state.active[i] and controllers.k_height > 0.0
+                and abs(control_state.e_in[i]) < ADAPT_BAND):
+            lim = controllers.dV_max[i]
+            step = (controllers.period * controllers.k_height
+                    * (control_state.z_ref[i] - control_state.z_f[i]))
+            control_state.adapt[i] = min(max(control_state.adapt[i] + step, -lim), lim)
 
 
 @jit
-def reference(tau, distance, C):
+def reference(tau, distance, controllers):
     """(position [m], velocity [m/s]) along the planned ascent ``tau`` [s] after its start over
     ``distance`` [m]: the trapezoid, or the valve-limited profile scaled to the distance."""
-    if C.ref_T <= 0.0:
-        return trapezoid(tau, distance, C.speed, C.accel)
-    k = distance / C.target
-    return (k * linear(C.ref_z, 0.0, C.ref_T, tau), k * linear(C.ref_v, 0.0, C.ref_T, tau))
+    if controllers.ref_T <= 0.0:
+        return trapezoid(tau, distance, controllers.speed, controllers.accel)
+    k = distance / controllers.target
+    return (k * linear(controllers.ref_z, 0.0, controllers.ref_T, tau),
+            k * linear(controllers.ref_v, 0.0, controllers.ref_T, tau))
 
 
 @jit
-def _note_separations(t, separated, C, S):
+def _note_separations(t, separated, controllers, control_state):
     """Start the reference of every bag whose hold has let go and whose start time has come."""
     new = False
     for i in range(separated.size):
-        if math.isnan(S.t_sep[i]) and not math.isnan(S.t_free[i]) and S.started[i]:
-            S.t_sep[i] = t
+        if (math.isnan(control_state.t_sep[i]) and not math.isnan(control_state.t_free[i])
+                and control_state.started[i]):
+            control_state.t_sep[i] = t
             new = True
     if not new:
         return
-    S.flags[1] = True
-    if C.mode == COORDINATED and C.staged:  # each group from the mean height of its bags
+    control_state.flags[1] = True
+    if controllers.mode == COORDINATED and controllers.staged:  # each group: its bags' mean
         total, count = 0.0, 0
-        for i in range(S.z_f.size):
-            if S.t_sep[i] == t and S.active[i]:
-                total += S.z_f[i]
+        for i in range(control_state.z_f.size):
+            if control_state.t_sep[i] == t and control_state.active[i]:
+                total += control_state.z_f[i]
                 count += 1
-        for i in range(S.z_f.size):
-            if S.t_sep[i] == t:
-                S.z0[i] = total / count if count else S.z_f[i]
-    elif C.mode == COORDINATED:  # one heave reference from the live bags' mean height
+        for i in range(control_state.z_f.size):
+            if control_state.t_sep[i] == t:
+                control_state.z0[i] = total / count if count else control_state.z_f[i]
+    elif controllers.mode == COORDINATED:  # one heave reference from the live bags' mean height
         total, count = 0.0, 0
-        for i in range(S.z_f.size):
-            if S.active[i]:
-                total += S.z_f[i]
+        for i in range(control_state.z_f.size):
+            if control_state.active[i]:
+                total += control_state.z_f[i]
                 count += 1
         mean = total / count if count else 0.0
-        for i in range(S.z_f.size):
-            S.z0[i] = mean
+        for i in range(control_state.z_f.size):
+            control_state.z0[i] = mean
     else:
-        for i in range(S.z_f.size):
-            if S.t_sep[i] == t:
-                S.z0[i] = S.z_f[i]
+        for i in range(control_state.z_f.size):
+            if control_state.t_sep[i] == t:
+                control_state.z0[i] = control_state.z_f[i]
 
 
 @jit
-def supervise(C, S):
-    """The supervisor's output from the lookup table, into ``S.u`` (0 before separation)."""
-    for i in range(S.u.size):
-        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:
-            S.u[i] = 0.0
+def supervise(controllers, control_state):
+    """The supervisor's output from the lookup table, into ``control_state.u`` (0 before
+    separation)."""
+    for i in range(control_state.u.size):
+        if math.isnan(control_state.t_sep[i]) or controllers.mode == OPEN_LOOP:
+            control_state.u[i] = 0.0
         else:
-            S.u[i] = bilinear(C.table, -1.0, 1.0, -1.0, 1.0, S.e_in[i], S.r_in[i])
+            control_state.u[i] = bilinear(controllers.table, -1.0, 1.0, -1.0, 1.0,
+                                          control_state.e_in[i], control_state.r_in[i])
 
 
 @jit
-def act(V, C, S):
-    """Desired volumes, fill and purge commands from ``S.u`` and the measured volumes ``V``
-    (nc,) [m^3], into ``S.V_d``, ``S.fill`` [m^3/s] and ``S.opening`` [-]."""
+def act(V, controllers, control_state):
+    """Desired volumes, fill and purge commands from ``control_state.u`` and the measured
+    volumes ``V`` (nc,) [m^3], into ``control_state``: ``V_d``, ``fill`` [m^3/s] and
+    ``opening`` [-]."""
     nc = V.size
     for i in range(nc):
-        if math.isnan(S.t_sep[i]) or C.mode == OPEN_LOOP:  # held: the pull from its start
-            S.V_d[i] = C.V_neutral[i] + (C.V_pull[i] if S.started[i] else 0.0)
+        if math.isnan(control_state.t_sep[i]) or controllers.mode == OPEN_LOOP:
+            # held: the pull from its start
+            pull = controllers.V_pull[i] if control_state.started[i] else 0.0
+            control_state.V_d[i] = controllers.V_neutral[i] + pull
         else:
-            S.V_d[i] = C.V_neutral[i] + S.adapt[i] + S.u[i] * C.dV_max[i]
-    if C.mode == COORDINATED:
-        _level(C, S)
-    a = C.period / (DERIV_TAU + C.period)
-    gain = 1.0 / math.sqrt(1.0 + C.lam * C.lam) / C.d_scale
+            control_state.V_d[i] = (controllers.V_neutral[i] + control_state.adapt[i]
+                                    + control_state.u[i] * controllers.dV_max[i])
+    if controllers.mode == COORDINATED:
+        _level(controllers, control_state)
+    a = controllers.period / (DERIV_TAU + controllers.period)
+    gain = 1.0 / math.sqrt(1.0 + controllers.lam * controllers.lam) / controllers.d_scale
     for i in range(nc):
-        eps = S.V_d[i] - V[i]
-        prev = S.prev_eps[i] if S.flags[0] else eps
-        S.eps_rate[i] += a * ((eps - prev) / C.period - S.eps_rate[i])
-        S.prev_eps[i] = eps
-        d = min(max((S.eps_rate[i] + C.lam * eps) * gain, -1.0), 1.0)
-        fill = linear(C.fill_v, 0.0, 1.0, d) * C.fill_max if eps > C.deadband else 0.0
+        eps = control_state.V_d[i] - V[i]
+        prev = control_state.prev_eps[i] if control_state.flags[0] else eps
+        control_state.eps_rate[i] += a * ((eps - prev) / controllers.period
+                                          - control_state.eps_rate[i])
+        control_state.prev_eps[i] = eps
+        d = min(max((control_state.eps_rate[i] + controllers.lam * eps) * gain, -1.0), 1.0)
+        fill = (linear(controllers.fill_v, 0.0, 1.0, d) * controllers.fill_max
+                if eps > controllers.deadband else 0.0)
         opening = 0.0
-        if C.mode != OPEN_LOOP:
-            opening = _purge(i, -eps, C, S)
+        if controllers.mode != OPEN_LOOP:
+            opening = _purge(i, -eps, controllers, control_state)
             if opening > 0.0:
                 fill = 0.0
-        if not S.active[i]:
+        if not control_state.active[i]:
             fill, opening = 0.0, 0.0
-        S.fill[i], S.opening[i] = fill, opening
-    S.flags[0] = True
+        control_state.fill[i], control_state.opening[i] = fill, opening
+    control_state.flags[0] = True
 
 
 @jit
-def _purge(i, excess, C, S):
+def _purge(i, excess, controllers, control_state):
     """PID valve opening [-] of bag ``i`` on the volume ``excess`` [m^3]; conditional
     integration: the integral holds while the valve is saturated open or the PID is off."""
-    raw = C.kp * excess + C.ki * S.integ[i]
-    if C.kd != 0.0:
-        raw += C.kd * (excess - S.prev_excess[i]) / C.period
-        S.prev_excess[i] = excess
-    on = excess > C.deadband or S.integ[i] > 0.0
+    raw = controllers.kp * excess + controllers.ki * control_state.integ[i]
+    if controllers.kd != 0.0:
+        raw += controllers.kd * (excess - control_state.prev_excess[i]) / controllers.period
+        control_state.prev_excess[i] = excess
+    on = excess > controllers.deadband or control_state.integ[i] > 0.0
     hold = (raw >= 1.0 and excess > 0.0) or not on
     if not hold:
-        S.integ[i] = max(S.integ[i] + excess * C.period, 0.0)
+        control_state.integ[i] = max(control_state.integ[i] + excess * controllers.period, 0.0)
     return min(max(raw, 0.0), 1.0) if on else 0.0
 
 
 @jit
-def _level(C, S):
+def _level(controllers, control_state):
     """Coordinated mode: the pitch-levelling correction of every desired volume (staged: of
     the bags under way, on their height errors)."""
     total, count = 0.0, 0
-    for i in range(S.z_f.size):
-        if _levelled(i, C, S):
-            total += C.x[i]
+    for i in range(control_state.z_f.size):
+        if _levelled(i, controllers, control_state):
+            total += controllers.x[i]
             count += 1
     if count < 2:
         return
     mean = total / count
     xx, xz, xzd = 0.0, 0.0, 0.0
-    for i in range(S.z_f.size):
-        if _levelled(i, C, S):
-            d = C.x[i] - mean
+    for i in range(control_state.z_f.size):
+        if _levelled(i, controllers, control_state):
+            d = controllers.x[i] - mean
             xx += d * d
-            if C.staged:
-                xz += d * (S.z_f[i] - S.z_ref[i])
-                xzd += d * (S.zd_f[i] - S.zd_ref[i])
+            if controllers.staged:
+                xz += d * (control_state.z_f[i] - control_state.z_ref[i])
+                xzd += d * (control_state.zd_f[i] - control_state.zd_ref[i])
             else:
-                xz += d * S.z_f[i]
-                xzd += d * S.zd_f[i]
+                xz += d * control_state.z_f[i]
+                xzd += d * control_state.zd_f[i]
     if xx <= 0.0:
         return
-    corr = C.k_pitch * xz / xx + C.k_pitch_rate * xzd / xx
-    if not C.staged:
-        for i in range(S.z_f.size):
-            S.V_d[i] -= corr * C.lever[i]
+    corr = controllers.k_pitch * xz / xx + controllers.k_pitch_rate * xzd / xx
+    if not controllers.staged:
+        for i in range(control_state.z_f.size):
+            control_state.V_d[i] -= corr * controllers.lever[i]
         return
     half = 0.0  # the levers of the bags under way, about their own centre
-    for i in range(S.z_f.size):
-        if _levelled(i, C, S):
-            half = max(half, abs(C.x[i] - mean))
-    for i in range(S.z_f.size):
-        if _levelled(i, C, S):
-            S.V_d[i] -= corr * (C.x[i] - mean) / half
+    for i in range(control_state.z_f.size):
+        if _levelled(i, controllers, control_state):
+            half = max(half, abs(controllers.x[i] - mean))
+    for i in range(control_state.z_f.size):
+        if _levelled(i, controllers, control_state):
+            control_state.V_d[i] -= corr * (controllers.x[i] - mean) / half
 
 
 @jit
-def _levelled(i, C, S):
+def _levelled(i, controllers, control_state):
     """Whether bag ``i`` takes part in the levelling: live, and in a staged lift under way."""
-    return S.active[i] and (not C.staged or not math.isnan(S.t_sep[i]))
+    return control_state.active[i] and (not controllers.staged
+                                        or not math.isnan(control_state.t_sep[i]))
 
 
 @jit
-def sample(t, z, zd, V, separated, C, S):
+def sample(t, z, zd, V, separated, controllers, control_state):
     """One whole control sample (observe, supervise from the table, act) on the named tuples
-    ``C``, ``S``, as the compiled loop does it; for Python callers and tests."""
-    Cs, Ss = as_struct(C), as_struct(S)
-    observe(t, z, zd, separated, Cs, Ss)
-    supervise(Cs, Ss)
-    act(V, Cs, Ss)
+    ``controllers`` (:class:`ControlArrays`) and ``control_state`` (:class:`ControlState`), as
+    the compiled loop does it; for Python callers and tests."""
+    constants, memory = as_struct(controllers), as_struct(control_state)
+    observe(t, z, zd, separated, constants, memory)
+    supervise(constants, memory)
+    act(V, constants, memory)

@@ -39,9 +39,9 @@ def design(scenario, hull, plan, plant=None, per_element: int = 50):
     plant = plant or coupled_plant(scenario, hull, plan)
     moving = hull.mass_per_length + wet_beam(scenario, hull)[1]
     ext = [n for n, e in zip(plant.names, plant.external) if e]
-    pulls = dict(zip(ext, (bag_pulls(scenario, plant) * plant.arrays.rho_g).tolist()))
-    holding = dict(zip(plant.names, (plant.neutral_volume * plant.arrays.rho_g).tolist()))
-    return design_cases(plan, hull, moving, float(plant.arrays.H0.sum()), plant.hold_stern_bow,
+    pulls = dict(zip(ext, (bag_pulls(scenario, plant) * plant.bags.rho_g).tolist()))
+    holding = dict(zip(plant.names, (plant.neutral_volume * plant.bags.rho_g).tolist()))
+    return design_cases(plan, hull, moving, float(plant.seabed.H0.sum()), plant.hold_stern_bow,
                         pulls, per_element, holding)
 
 

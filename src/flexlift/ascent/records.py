@@ -1,0 +1,191 @@
+"""The plant as the compiled loop reads it: one record per part, and the loop's inputs.
+
+A plant (:mod:`flexlift.ascent.plant`, :mod:`flexlift.ascent.paper`) is four read-only
+records of arrays, SI throughout:
+
+- :class:`Modal`: the retained modal coordinates (nr of them) and their mechanics;
+- :class:`Strips`: the ``ns`` quadrature points along the structure (its distributed loads:
+  drag, seabed contact, released suction);
+- :class:`Bags`: the ``nb`` lift bags (their points, the gas in them and the constants of
+  its laws, drag, and the static correction of the heights and slopes recorded there);
+- :class:`Seabed`: the ``ng`` holding groups of the seabed's suction.
+
+:class:`PlantRecords` holds the four; the compiled loop reads ``plant.bags.capacity``.
+:class:`LoopInputs` gathers it with the controllers' and the run's records
+(:mod:`flexlift.control.controller`, :mod:`flexlift.ascent.state`): the one argument of the
+compiled loop (:mod:`flexlift.ascent.kernel`). Inside the loop each record is a struct
+passed as one pointer, at the price of a reference count per record a function takes (a
+few ns a call): the plant is one of them, not four.
+
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class Modal(NamedTuple):
+    """The retained modal coordinates q [m sqrt(kg)]: q'' + damping q' + omega2 q = Q.
+
+    ========================= =========== ==================================================
+    field                     unit        meaning
+    ========================= =========== ==================================================
+    nr                        -           number of modal coordinates
+    omega2 (nr,)              rad^2/s^2   omega^2
+    damping (nr,)             1/s         2 zeta omega
+    weight_force (nr,)        N           generalised wet weight (point masses included)
+    pitch_row (nr,)           rad         the hull's pitch angle per unit q
+    heave_row (nr,)           m           heave of the centre of mass per unit q
+    ========================= =========== ==================================================
+    """
+
+    nr: int
+    omega2: np.ndarray
+    damping: np.ndarray
+    weight_force: np.ndarray
+    pitch_row: np.ndarray
+    heave_row: np.ndarray
+
+
+class Strips(NamedTuple):
+    """The quadrature points ("strips") along the structure and their loads.
+
+    ========================= =========== ==================================================
+    field                     unit        meaning
+    ========================= =========== ==================================================
+    ns                        -           number of strips
+    shape (ns, nr)            m / q       displacement at each strip per unit q
+    force (nr, ns)            m           generalised force per unit line load at a strip
+    weight (ns,)              m           quadrature weight: line load times it is a force
+    drag (ns,)                kg/m^2      hull drag coefficient 1/2 rho C_D B
+    contact_k (ns,)           N/m^2       seabed contact stiffness per length
+    contact_c (ns,)           N s/m^2     seabed contact damping per length
+    group (ns,) int           -           the holding group the strip belongs to
+    hold (ns,)                1/m         holding line load per unit H of its group
+    ========================= =========== ==================================================
+    """
+
+    ns: int
+    shape: np.ndarray
+    force: np.ndarray
+    weight: np.ndarray
+    drag: np.ndarray
+    contact_k: np.ndarray
+    contact_c: np.ndarray
+    group: np.ndarray
+    hold: np.ndarray
+
+
+class Bags(NamedTuple):
+    """The lift bags: their points on the structure, their gas and the recorded corrections.
+
+    ========================= =========== ==================================================
+    field                     unit        meaning
+    ========================= =========== ==================================================
+    nb                        -           number of bags
+    shape (nb, nr)            m / q       displacement at each bag point per unit q
+    slope (nb, nr)            rad / q     slope (local pitch angle) at each bag point per q
+    force (nr, nb)            -           generalised force per unit bag force
+    group (nb,) int           -           the holding group each bag lifts
+    capacity (nb,)            m^3         bag capacity V_max
+    relief (nb,)              Pa          over-pressure relief setting (0: open bag)
+    top_offset (nb,)          m           height of a bag's top above the hull bottom
+    drag (nb,)                kg/m        bag drag coefficient 1/2 rho C_D,bag A
+    purge_max                 m^3/s       the purge valves' largest flow Q_out,max
+    RT                        J/mol       R T of the gas at the sea's temperature
+    p_atm                     Pa          atmospheric pressure
+    rho_g                     N/m^3       seawater density times gravity
+    water_depth               m           depth of the seabed (the ambient pressure)
+    corr_strip (nb, ns)       m / (N/m)   static correction of the heights per line load
+    corr_bag (nb, nb)         m/N         ... per unit bag force
+    corr_weight (nb,)         m           ... of the wet weight
+    slope_strip (nb, ns)      rad / (N/m) static correction of the slopes per line load
+    slope_bag (nb, nb)        rad/N       ... per unit bag force
+    slope_weight (nb,)        rad         ... of the wet weight
+    ========================= =========== ==================================================
+
+    The corrections are the eliminated modes' static (mdc) response: they enter the recorded
+    heights and slopes, not the mechanics.
+    """
+
+    nb: int
+    shape: np.ndarray
+    slope: np.ndarray
+    force: np.ndarray
+    group: np.ndarray
+    capacity: np.ndarray
+    relief: np.ndarray
+    top_offset: np.ndarray
+    drag: np.ndarray
+    purge_max: float
+    RT: float
+    p_atm: float
+    rho_g: float
+    water_depth: float
+    corr_strip: np.ndarray
+    corr_bag: np.ndarray
+    corr_weight: np.ndarray
+    slope_strip: np.ndarray
+    slope_bag: np.ndarray
+    slope_weight: np.ndarray
+
+
+class Seabed(NamedTuple):
+    """The seabed's hold, split into holding groups (one, or one per stage of a staged lift).
+
+    ========================= =========== ==================================================
+    field                     unit        meaning
+    ========================= =========== ==================================================
+    ng                        -           number of holding groups
+    hold_force (nr, ng)       -           generalised force per unit H of a group (down)
+    H0 (ng,)                  N           initial holding force
+    group_weight (ng,)        N           wet weight W_g a group's bags must lift
+    breakout_time             s           T_b
+    release_time              s           tau_r
+    liftoff_clearance         m           the structure is clear of the seabed above this
+    ========================= =========== ==================================================
+    """
+
+    ng: int
+    hold_force: np.ndarray
+    H0: np.ndarray
+    group_weight: np.ndarray
+    breakout_time: float
+    release_time: float
+    liftoff_clearance: float
+
+
+class PlantRecords(NamedTuple):
+    """The plant's records, as the compiled loop reads them (``plant.strips.shape``)."""
+
+    modal: Modal
+    strips: Strips
+    bags: Bags
+    seabed: Seabed
+
+
+class LoopInputs(NamedTuple):
+    """Everything the compiled loop reads and writes, by name.
+
+    ============== ======================================= ==================================
+    field          record                                  changes
+    ============== ======================================= ==================================
+    plant          :class:`PlantRecords`                   read only
+    controllers    control.controller.ControlArrays        read only
+    control_state  control.controller.ControlState         the controllers' memory
+    state          ascent.state.RunState                   every step
+    switches       ascent.state.Switches                   faults, noise (between calls)
+    settings       ascent.state.Settings                   read only
+    recorder       ascent.state.Record                     rows, snapshots, events
+    ============== ======================================= ==================================
+    """
+
+    plant: PlantRecords
+    controllers: NamedTuple
+    control_state: NamedTuple
+    state: NamedTuple
+    switches: NamedTuple
+    settings: NamedTuple
+    recorder: NamedTuple
