@@ -1,4 +1,4 @@
-"""Each control law of SPEC §7 as the compiled controller computes it, one sample at a time.
+"""Each control law of docs/theory/control.md as the compiled controller computes it, one sample at a time.
 
 tests/test_controller.py covers the breakout pull, the purge's anti-windup, open-loop,
 coordination, the adaptation and the height filter; these tests pin the remaining terms with

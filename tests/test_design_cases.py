@@ -1,4 +1,4 @@
-"""The static design cases closed physically (SPEC §10.5, issue 23), checked against an
+"""The static design cases closed physically (docs/theory/strength.md#design-cases, issue 23), checked against an
 integration of the loads written here from the hull, the plan and the ascent's suction and
 pull, not from :mod:`flexlift.loads`' load cases.
 

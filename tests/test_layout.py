@@ -1,4 +1,4 @@
-"""The package's layout keeps data and imports flowing one way (DESIGN.md): no import cycles,
+"""The package's layout keeps data and imports flowing one way (docs/development/design.md#layers): no import cycles,
 and each layer imports only from the layers before it."""
 
 import ast

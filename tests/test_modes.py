@@ -167,7 +167,7 @@ def test_node_of_mode_matches_analytic_zero_crossings():
 
 
 def test_tanker_third_flexible_mode_nodes(tanker_modes):
-    # SPEC section 1: the four external bags sit at the nodes of the third flexible mode
+    # docs/theory/factors.md#bag-count: the four external bags sit at the nodes of the third flexible mode
     col = tanker_modes.flexible_index(3)
     assert [n + 1 for n in mode_nodes(tanker_modes, col)] == [2, 5, 8, 11]
 

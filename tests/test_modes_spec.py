@@ -1,4 +1,4 @@
-"""SPEC section 2 for every mode returned: Phi^T M Phi = I and Phi^T K Phi = diag(omega^2).
+"""docs/theory/modes.md#mass-normalisation for every mode returned: Phi^T M Phi = I and Phi^T K Phi = diag(omega^2).
 
 The stiffness Gram matrix is computed from the factor form D^T W D of K (no cancellation of
 the ~EI/l^3 entries of an assembled K), each entry relative to the larger omega^2 of its pair:

@@ -26,7 +26,7 @@ def test_ambient_pressure_is_the_water_column_and_stops_at_the_surface():
 
 
 def test_boyle_bag_raised_in_steps():
-    """A fixed amount of gas raised from the seabed: p V constant, six-fold at 50 m (SPEC §5)."""
+    """A fixed amount of gas raised from the seabed: p V constant, six-fold at 50 m (docs/theory/gas.md#boyle)."""
     heights = np.arange(0.0, 301.0, 50.0)
     p = gas.ambient_pressure(heights, DEPTH, P_ATM, RG)
     n = gas.moles_of(50.0, p[0], RT)

@@ -1,4 +1,4 @@
-"""The pipe section (SPEC §9.1): properties against hand values, the derived hull, bad input."""
+"""The pipe section (docs/theory/statics.md#pipe-section): properties against hand values, the derived hull, bad input."""
 
 import math
 

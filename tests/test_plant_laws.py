@@ -1,4 +1,4 @@
-"""The assembled, compiled plant against each law (SPEC §5-6, §8).
+"""The assembled, compiled plant against each law (docs/theory/loop.md#state, §8).
 
 tests/test_physics.py checks each law of flexlift.physics on its own. These tests check that
 the compiled ascent applies the laws with the scenario's coefficients: they build the tanker's
@@ -51,7 +51,7 @@ EXTERNAL, INTERNAL = [0, 1, 2, 3], [4, 5, 6]  # the tanker's bags
 
 
 def pressure(height):
-    """Ambient pressure at ``height`` above the seabed [Pa] (SPEC §5)."""
+    """Ambient pressure at ``height`` above the seabed [Pa] (docs/theory/gas.md#ambient-pressure)."""
     return ENV.atmospheric_pressure_Pa + RHO_G * (ENV.water_depth_m - height)
 
 
@@ -417,7 +417,7 @@ def test_the_step_is_the_trapezoidal_rule(plant, contact):
 
 # ----------------------------------------------------------------------------- the paper's plant
 def test_the_papers_bag_feels_its_tributary_share(plant):
-    """SPEC §8: the force on each uncoupled bag model is its own lift and bag drag minus its
+    """docs/theory/loop.md#paper-plant: the force on each uncoupled bag model is its own lift and bag drag minus its
     tributary share (by hull length) of the wet weight net of the internal bags, of the
     suction and of the hull drag; each bag starts neutral on its share."""
     pp = paper_plant(SC, coupled=plant)

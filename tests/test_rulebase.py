@@ -1,4 +1,4 @@
-"""The supervisory FIS of SPEC §7 and the SIFSMC fill map: oracle scikit-fuzzy, symmetry, bounds."""
+"""The supervisory FIS of docs/theory/control.md#rule-table and the SIFSMC fill map: oracle scikit-fuzzy, symmetry, bounds."""
 
 import math
 
@@ -17,7 +17,7 @@ def fis():
 
 
 def test_rule_table_is_the_spec_table(fis):
-    # SPEC §7's table is u = clip(i_e + i_edot - 3) in label indices (NB = 0 ... PB = 6)
+    # docs/theory/control.md#rule-table's table is u = clip(i_e + i_edot - 3) in label indices (NB = 0 ... PB = 6)
     for row, outs in SUPERVISOR_TABLE.items():
         i = LABELS.index(row)
         assert [LABELS.index(o) for o in outs] == [min(max(i + j - 3, 0), 6) for j in range(7)]

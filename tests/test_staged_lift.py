@@ -1,4 +1,4 @@
-"""A staged lift (control.sequence, SPEC §9.1): the sequence, the plant's stretches, the
+"""A staged lift (control.sequence, docs/theory/statics.md#staged): the sequence, the plant's stretches, the
 controllers' start times, and the built-in pipeline peeled off the seabed stage by stage."""
 
 import numpy as np

@@ -40,7 +40,7 @@ def test_heavy_beam_lifted_at_one_end_matches_the_closed_form():
 
     The shear EI w''' just before the touchdown is EI A = q l / 2 while the flat part carries
     none: the seabed pushes back with a point force q l / 2 there (shear is not continuous;
-    the moment is). SPEC §9.1 states the same result. flexlift's seabed is springs; stiff
+    the moment is). docs/theory/statics.md#peel-off states the same result. flexlift's seabed is springs; stiff
     ones (1e11 N/m per m, spread length (4 EI / k)^(1/4) = 0.28 m against l = 40 m) and
     0.2 m elements bring it within 2 %. Here F is given (the command takes lifts) and h is
     measured; l, F and M of the closed form from that h are compared with flexlift's.

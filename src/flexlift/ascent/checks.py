@@ -1,4 +1,4 @@
-"""Checks of a lift plan before the run (SPEC §3, §5-7): each says what it found, with the
+"""Checks of a lift plan before the run (docs/theory/strength.md#checks): each says what it found, with the
 numbers and the fix.
 
 A *refusal* means the plan cannot work at all (the run would only fail): :func:`refuse_unworkable`
@@ -6,7 +6,7 @@ raises :class:`~flexlift.errors.InputError` with one line, and :func:`~flexlift.
 calls it. The others are warnings, shown by ``flexlift loads`` and in the report:
 
 - balance: the lift centroid against the centre of gravity, and the static pitch moment;
-- breakout: the pull against the suction H_0 and the separation time it implies (SPEC §6)
+- breakout: the pull against the suction H_0 and the separation time it implies (docs/theory/seabed.md#suction-held)
   against the run's duration;
 - purge capacity: from which height up the planned speed cannot be held by purging (the
   planned ascent slows there, :mod:`flexlift.control.profile`);
@@ -91,7 +91,7 @@ def plan_checks(scenario, plant) -> list[Check]:
 def sequence_check(scenario, plant) -> Check:
     """Whether the structure is flexible enough to be peeled off in the stages of
     ``control.sequence``: a stage rising h ahead of the next bends the structure over the
-    length a heavy beam lifted off the seabed takes, l = (24 EI h / q)^(1/4) (SPEC §9.1); a
+    length a heavy beam lifted off the seabed takes, l = (24 EI h / q)^(1/4) (docs/theory/statics.md#peel-off); a
     stage's stretch shorter than that does not peel, it pivots on the held one."""
     c, hull = scenario.control, plant.hull
     lead = trapezoid(c.sequence.delay_s, c.target_height_m, c.ascent_speed_m_s,
@@ -139,7 +139,7 @@ def balance_check(plant) -> Check:
 
 def _separations(scenario, plant):
     """The breakout pull of each external bag and what the fill holds of it [m^3], and each
-    stage's separation time and fill time [s] (SPEC §6: the bags of a stage fill at once)."""
+    stage's separation time and fill time [s] (docs/theory/seabed.md#suction-held: the bags of a stage fill at once)."""
     ext = np.flatnonzero(plant.external)
     V_pull = bag_pulls(scenario, plant)
     held = np.maximum(V_pull - scenario.control.volume_deadband_m3, 0.0)
@@ -194,7 +194,7 @@ def warn_short(scenario, plant) -> None:
 
 
 def breakout_check(scenario, plant) -> Check:
-    """Whether the pull breaks the suction within the run (SPEC §6 and the fill). The fill
+    """Whether the pull breaks the suction within the run (docs/theory/seabed.md#suction-held and the fill). The fill
     stops within the volume deadband of its target, so each bag holds its pull less the
     deadband. A staged lift: each stage's stretch separates under its own bags' pull from
     their start; the last to let go decides."""

@@ -1,4 +1,4 @@
-"""What happened in an ascent, in one word and one sentence (SPEC §7 criteria).
+"""What happened in an ascent, in one word and one sentence (the criteria: docs/theory/factors.md#criteria).
 
 - ``safe``: every criterion held, the target held for ``simulation.hold_time_s``;
 - ``unsafe``: a limit broken (any criterion but ``reached_target``), with its cause; or the

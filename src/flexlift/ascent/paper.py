@@ -1,4 +1,4 @@
-"""The paper's configuration (SPEC §8) as a plant: every external bag on its own 4-state model.
+"""The paper's configuration (docs/theory/loop.md#paper-plant) as a plant: every external bag on its own 4-state model.
 
 Each external bag i sees only the unsorted-mdc 4-state model of
 :func:`flexlift.dynamics.reduce.paper_bag_model` (the wet hull's two rigid modes at the bag's node; the
@@ -12,7 +12,7 @@ length, the hull divided at the midpoints between bag points) and one holding gr
   modelled further), of the hull drag and of the suction, plus a seabed spring over its
   tributary length;
 - each bag breaks out on its own: its holding force starts at its tributary share of H_0 (in
-  the holding shape) and follows SPEC §6 with its own uplift;
+  the holding shape) and follows docs/theory/seabed.md#suction-held with its own uplift;
 - each bag starts neutral on its own model (gas for its tributary share of the net wet
   weight), and its controllers take that as their neutral volume.
 

@@ -388,7 +388,7 @@ LIFTOFF_CLEARANCE = 0.05
 
 def neutral_volumes(external: np.ndarray, capacity: np.ndarray, wet_weight, rho_g: float,
                     bag_group: np.ndarray | None = None) -> np.ndarray:
-    """Gas volumes at the start (SPEC §5) [m^3]: the internal (closed) bags full, the external
+    """Gas volumes at the start (docs/theory/gas.md#initial-state) [m^3]: the internal (closed) bags full, the external
     bags sharing the rest of the wet weight W' [N] equally so the hull rests neutral; with
     holding groups (``bag_group``, ``wet_weight`` per group), within each group."""
     groups = np.zeros(external.size, dtype=np.int64) if bag_group is None else bag_group
@@ -419,7 +419,7 @@ def holding_groups(scenario, names, x_point, external, xs):
     """(group of each strip (ns,), group of each bag (nb,), number of groups) of the seabed's
     hold. One group unless the lift is staged (``control.sequence``): then each stage's
     group of bags has its own stretch of the structure (the strips nearest to its bags) with
-    its share of the suction and of the weight, and lets go on its own (SPEC §9.1): a
+    its share of the suction and of the weight, and lets go on its own (docs/theory/seabed.md#stages): a
     pipeline peels off stage by stage. An internal bag belongs to the stretch its point is in."""
     if scenario.control.sequence is None:
         return np.zeros(xs.size, dtype=np.int64), np.zeros(len(names), dtype=np.int64), 1
@@ -435,7 +435,7 @@ def holding_groups(scenario, names, x_point, external, xs):
 
 
 def check_neutral(plant: Plant) -> None:
-    """InputError when the bags cannot hold the structure neutral at the start (SPEC §5):
+    """InputError when the bags cannot hold the structure neutral at the start (docs/theory/gas.md#initial-state):
     the internal bags full and the external bags sharing the rest of W' must fit."""
     V = plant.neutral_volume
     ext = plant.external

@@ -292,7 +292,7 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
             "reached_target": "target_held" in kinds,
             "no_surface_breach": "surface_breach" not in kinds,
             "no_resettle": "resettle" not in kinds,
-            # the dynamic hull girder stress over the ascent within the allowable (SPEC §10.3)
+            # the dynamic hull girder stress over the ascent within the allowable (docs/theory/strength.md#dynamic-strength)
             "bending_utilisation": not ("utilisation_max" in ds
                                         and float(ds["utilisation_max"].max()) > 1.0)}
 

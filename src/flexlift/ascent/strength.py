@@ -1,4 +1,4 @@
-"""Shear force and bending moment along the structure during the ascent (SPEC §3, §8).
+"""Shear force and bending moment along the structure during the ascent (docs/theory/strength.md#dynamic-strength).
 
 From the loop's strength snapshots (modal state and accelerations, holding forces, gas
 volumes, slings, current, noise), the loads on a fine grid along the hull come from the same

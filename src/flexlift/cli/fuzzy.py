@@ -1,4 +1,4 @@
-"""``flexlift fuzzy``: the supervisory fuzzy controller (SPEC §7) — draw it, tabulate it,
+"""``flexlift fuzzy``: the supervisory fuzzy controller (docs/theory/control.md#supervisor) — draw it, tabulate it,
 evaluate it; or any MATLAB ``.fis`` file.
 
 Without ``--fis`` the built-in supervisory system is used, with the operators of the

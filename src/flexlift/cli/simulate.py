@@ -1,4 +1,4 @@
-"""``flexlift simulate``: the controlled ascent of a scenario (SPEC §5-8).
+"""``flexlift simulate``: the controlled ascent of a scenario (docs/theory/loop.md).
 
 Exit codes: 0 when the run completed (whether or not the criteria passed: they are in the
 JSON and the summary, and ``flexlift run`` shows pass/fail), 1 when the numerics failed (the

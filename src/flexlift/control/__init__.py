@@ -1,2 +1,2 @@
-"""The ascent's controllers (SPEC §7): reference, supervisor, SIFSMC fill, PID purge and
+"""The ascent's controllers (docs/theory/control.md): reference, supervisor, SIFSMC fill, PID purge and
 coordination, compiled and vectorised over the controlled bags."""

@@ -1,4 +1,4 @@
-"""The ascent controllers (SPEC §7) of all controlled bags at once: one compiled controller.
+"""The ascent controllers (docs/theory/control.md) of all controlled bags at once: one compiled controller.
 
 Each control sample (zero-order hold at ``control.sample_rate_Hz``) takes the measured height
 [m], vertical speed [m/s] and gas volume [m^3] of every controlled (external) bag and does,

@@ -1,4 +1,4 @@
-"""The planned ascent that respects the purge valves (SPEC §5, §7).
+"""The planned ascent that respects the purge valves (docs/theory/gas.md#purge-capacity).
 
 A bag of gas volume V at pressure p rising at speed v expands at V rho g v / p (Boyle); the
 purge can take off at most Q_out,max sqrt(V / V_max) of it. Where the planned speed would need

@@ -1,4 +1,4 @@
-"""The planned ascent (SPEC §7): a trapezoidal velocity profile from the separation height to
+"""The planned ascent (docs/theory/control.md#reference): a trapezoidal velocity profile from the separation height to
 the target, accelerating gently to the ascent speed, cruising, decelerating to a stop."""
 
 from __future__ import annotations

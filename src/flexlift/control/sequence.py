@@ -1,4 +1,4 @@
-"""A staged lift (SPEC §9.1): when each external bag starts, from ``control.sequence``.
+"""A staged lift (docs/theory/statics.md#staged): when each external bag starts, from ``control.sequence``.
 
 Pipelines are peeled off the seabed from one end: once the suction has let go, the bags
 begin their ascent in groups, one group every ``delay_s``. :func:`start_times` turns the

@@ -1,1 +1,1 @@
-"""The modal state space of the bags (SPEC §4) and its reduction (del/mdc, sorted/unsorted)."""
+"""The modal state space of the bags (docs/theory/reduction.md#modal-state-space) and its reduction (del/mdc, sorted/unsorted)."""

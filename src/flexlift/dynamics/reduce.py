@@ -1,4 +1,4 @@
-"""Model order reduction of the modal state space by truncation (SPEC §4).
+"""Model order reduction of the modal state space by truncation (docs/theory/reduction.md#del-mdc).
 
 Keep r modes, eliminate the rest:
 

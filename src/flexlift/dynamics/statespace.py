@@ -1,4 +1,4 @@
-"""Modal state space of the free-free hull (SPEC §4), with closed-form responses.
+"""Modal state space of the free-free hull (docs/theory/reduction.md#modal-state-space), with closed-form responses.
 
 One equation per mode, ``q̈_i + 2 ζ_i ω_i q̇_i + ω_i² q_i = φ_iᵀ F(t)``; the state is
 ``x = [q_1, q̇_1, q_2, q̇_2, ...]`` so A is block diagonal with blocks
@@ -34,7 +34,7 @@ from flexlift.structure.modes import NEGATIVE_EIGENVALUE_TOL, Modes
 
 log = logging.getLogger(__name__)
 
-#: default ω_lo as a fraction of the first flexible frequency (SPEC §4)
+#: default ω_lo as a fraction of the first flexible frequency (docs/theory/reduction.md#dc-gain)
 OMEGA_LO_FRACTION = 0.1
 
 _SIGNAL = re.compile(r"^(f|w|v|theta)_(node|bag)_(\w+)$")

@@ -1,4 +1,4 @@
-"""Fuzzy inference (SPEC §7): the Mamdani/Sugeno engine with MATLAB's semantics, lookup tables
+"""Fuzzy inference (docs/theory/control.md#supervisor): the Mamdani/Sugeno engine with MATLAB's semantics, lookup tables
 of sampled maps, MATLAB ``.fis`` import and export, and the controllers' rule bases.
 
 - :mod:`.system`: :class:`FIS`, :class:`Variable`, :class:`MF`, :class:`Rule` and evaluation;

@@ -85,7 +85,7 @@ def from_fis_text(text: str, resolution: int = 101, source: str = ".fis",
 
 
 def load_controller_fis(path: str | os.PathLike, role: str, resolution: int = 101) -> FIS:
-    """A user's ``.fis`` file for one of flexlift's fuzzy controllers (SPEC §7).
+    """A user's ``.fis`` file for one of flexlift's fuzzy controllers (docs/theory/control.md#supervisor).
 
     role "supervisor": two inputs, the normalised height error ``e`` and its rate ``edot``
     (matched by name when the file names them so, else taken in order: first e, then edot),

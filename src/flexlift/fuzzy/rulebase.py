@@ -1,4 +1,4 @@
-"""The controllers' fuzzy systems, defined in one readable place (SPEC §7).
+"""The controllers' fuzzy systems, defined in one readable place (docs/theory/control.md#supervisor).
 
 - :func:`supervisor_fis` — the supervisory Mamdani controller: inputs the normalised height
   error ``e`` = (z_ref - z) / error_scale and its rate ``edot`` = (ż_ref - ż) / rate_scale, both
@@ -26,7 +26,7 @@ from flexlift.fuzzy.tables import Table1D
 
 LABELS = ("NB", "NM", "NS", "ZE", "PS", "PM", "PB")
 
-#: SPEC §7, verbatim: rows are the error e (PB at the top), columns the error rate ė.
+#: docs/theory/control.md#rule-table, verbatim: rows are the error e (PB at the top), columns the error rate ė.
 SUPERVISOR_TABLE: dict[str, tuple[str, ...]] = {
     #      ė:  NB    NM    NS    ZE    PS    PM    PB
     "PB": ("ZE", "PS", "PM", "PB", "PB", "PB", "PB"),
@@ -64,7 +64,7 @@ def triangular_partition(name: str, labels=LABELS, lo: float = -1.0, hi: float =
 def supervisor_fis(and_method: str = "min", or_method: str = "max", implication: str = "min",
                    aggregation: str = "max", defuzzification: str = "centroid",
                    resolution: int = 101) -> FIS:
-    """The supervisory controller of SPEC §7 (normalised, dimensionless).
+    """The supervisory controller of docs/theory/control.md#supervisor (normalised, dimensionless).
 
     Inputs: column 0 ``e`` in [-1, 1], column 1 ``edot`` in [-1, 1]; output ``u`` in [-1, 1].
     Operators as MATLAB names them; ``resolution`` output grid points (default 101).
@@ -144,7 +144,7 @@ def _check_user_fill(raw: np.ndarray, d: np.ndarray, source: str) -> None:
 
 
 def fill_fis(resolution: int = 101) -> FillMap:
-    """The SIFSMC's one-input map (SPEC §7): normalised signed distance -> fill fraction."""
+    """The SIFSMC's one-input map (docs/theory/control.md#sifsmc): normalised signed distance -> fill fraction."""
     d, v = triangular_partition("d"), triangular_partition("v")
     rules = tuple(Rule((LABELS.index(a),), LABELS.index(b)) for a, b in FILL_MAP.items())
     return FillMap(FIS("flexlift_fill", (d,), v, rules, resolution=resolution))

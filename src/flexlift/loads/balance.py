@@ -1,4 +1,4 @@
-"""A balanced layout of the external bags (SPEC §3): the lift centroid on the centre of gravity
+"""A balanced layout of the external bags (docs/theory/strength.md#balance): the lift centroid on the centre of gravity
 of what the bags carry, and a small static bending moment.
 
 The load the external bags must balance is the submerged weight (distributed like the mass,

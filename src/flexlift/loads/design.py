@@ -1,4 +1,4 @@
-"""The static design cases of the lift plan, each closed physically (SPEC §10.5).
+"""The static design cases of the lift plan, each closed physically (docs/theory/strength.md#design-cases).
 
 A free structure in water is in equilibrium only when its loads have no resultant and no
 moment. A lift plan's loads are not exactly so (bags rounded up to the tonne, a lift centroid
@@ -181,7 +181,7 @@ def design_cases(plan, hull: Hull, mass_per_length, H0: float, stern_bow: tuple[
 
 
 def paper_case(plan, hull: Hull, per_element: int = 50) -> tuple[LoadCase, Strength]:
-    """The paper's still-water case (SPEC §3): every bag at full lift against the breakout
+    """The paper's still-water case (docs/theory/strength.md#shear-moment): every bag at full lift against the breakout
     factor times W' distributed like the mass, integrated from the aft end and not closed;
     its values at the bow are its closing errors (the tanker: 0.021 MN, 0.84 MN m)."""
     case = lift_load_case(plan, hull)

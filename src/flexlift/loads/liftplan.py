@@ -1,4 +1,4 @@
-"""Hydrostatics, bag sizing and bag layout (SPEC §1, §3).
+"""Hydrostatics, bag sizing and bag layout (docs/theory/factors.md#bag-count).
 
 How much lift the wreck needs, how many bags of the catalogue size, how much each is modelled
 to lift, and where they go: internal cylindrical bags end to end over the ballast-tank span;
@@ -68,7 +68,7 @@ class LiftPlan:
     steel_density: float = C.RHO_STEEL  # [kg/m^3]
 
     def holding_lifts(self) -> np.ndarray:
-        """Each bag's lift while it holds the structure through the ascent [N] (SPEC §5): the
+        """Each bag's lift while it holds the structure through the ascent [N] (docs/theory/gas.md#initial-state): the
         internal bags full, the external bags sharing the rest of the wet weight equally (their
         rated lift when that is not possible, e.g. no external bag)."""
         lifts = np.array([b.lift for b in self.bags])
@@ -123,7 +123,7 @@ class LiftPlan:
 
 
 def bag_count(required_lift_t: float, catalogue_lift_t: float) -> tuple[int, float]:
-    """The bag-count rule of SPEC §1: n = ceil(required / catalogue), and the modelled lift
+    """The bag-count rule of docs/theory/factors.md#bag-count: n = ceil(required / catalogue), and the modelled lift
     per bag = required / n rounded up to the tonne. Inputs and output lift in tonnes."""
     if required_lift_t <= 0 or catalogue_lift_t <= 0:
         raise InputError("lift", (required_lift_t, catalogue_lift_t), "lifts must be positive [t]")

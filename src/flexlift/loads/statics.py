@@ -1,4 +1,4 @@
-"""Static equilibrium of the structure on the seabed under given bag lifts (SPEC §9.1).
+"""Static equilibrium of the structure on the seabed under given bag lifts (docs/theory/statics.md#equilibrium).
 
 The finite-element beam (:mod:`flexlift.structure.beam`) under its wet weight, point masses
 and the bags' lifts rests on a one-sided seabed: a spring at every node, of the scenario's
@@ -44,7 +44,7 @@ TOUCH_TOLERANCE_M = 1e-3
 
 def suspended_length(EI: float, q: float, h: float) -> float:
     """Length [m] a long heavy beam lifted off a rigid seabed at one end to a height ``h`` [m]
-    hangs free over (SPEC §9.1, small slopes): l = (24 EI h / q)^(1/4), EI [N m^2], q its wet
+    hangs free over (docs/theory/statics.md#peel-off, small slopes): l = (24 EI h / q)^(1/4), EI [N m^2], q its wet
     weight per length [N/m]; the lifting force is q l / 2 and the largest moment q l^2 / 8."""
     return (24.0 * EI * h / q) ** 0.25
 

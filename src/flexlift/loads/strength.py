@@ -1,4 +1,4 @@
-"""Loads on the hull and its longitudinal strength (SPEC §3).
+"""Loads on the hull and its longitudinal strength (docs/theory/strength.md#shear-moment).
 
 Sign conventions (used by every function here):
 
@@ -220,11 +220,11 @@ def lift_load_case(
     hull : the beam the plan was laid out on
     bag_lifts : lift of each bag by name [N]; default every bag at its full rated lift
     weight_factor : total downward load / wet weight [-]; default the plan's breakout
-        factor (1.3: weight plus suction breakout, SPEC §3)
+        factor (1.3: weight plus suction breakout, docs/theory/factors.md#breakout-factor)
 
     The downward load follows the mass distribution: each element carries
     ``weight_factor * (W'/W) * m_e g`` per metre, point masses give point loads. For a uniform
-    hull (the tanker) this is the uniform line load ``weight_factor * W' / L`` of SPEC §3.
+    hull (the tanker) this is the uniform line load ``weight_factor * W' / L`` of docs/theory/strength.md#load-case
     External bags are point forces at their positions, internal bags uniform loads over
     their spans.
     """

@@ -1,4 +1,4 @@
-"""``results.nc`` with every control mode of a run: one netCDF 3 file (SPEC §8).
+"""``results.nc`` with every control mode of a run: one netCDF 3 file (docs/theory/loop.md#state).
 
 Layout: each mode's dataset along a ``mode`` dimension. Runs of different lengths share one
 ``row`` dimension (and ``strength_row`` for the strength samples), the shorter padded with

@@ -116,7 +116,7 @@ def _controller_file(scenario, role: str) -> str:
 
     path = scenario.controller_files().get(f"control.{role}.fis_file")
     if path is None:
-        return "built-in rule base (SPEC §7)"
+        return "built-in rule base (docs/theory/control.md#rule-table)"
     return f"the user's MATLAB file {Path(path).name}, SHA-256 {file_sha256(path)}"
 
 
@@ -274,7 +274,7 @@ def _appendix_section(stages: list[StageOutput]) -> list[str]:
 def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
     """The whole report as one HTML page (figures embedded as base64 PNG)."""
     generated = generated or datetime.now(UTC)
-    # lift criteria (SPEC §7) decide the verdict; the other stages' checks are numerical
+    # lift criteria (docs/theory/factors.md#criteria) decide the verdict; the other stages' checks are numerical
     # self-checks of the analysis, shown apart but counted too
     lift = {f"{s.name.split(':', 1)[1]}: {k}": v for s in stages
             if s.name.startswith("simulate:") for k, v in s.criteria.items()}

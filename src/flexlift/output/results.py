@@ -1,4 +1,4 @@
-"""Results on disk: an ascent's dataset as netCDF and its time histories as CSV (SPEC §8).
+"""Results on disk: an ascent's dataset as netCDF and its time histories as CSV (docs/theory/loop.md#outputs).
 
 The dataset itself (variables, units, criteria, headline numbers) is built by
 :mod:`flexlift.ascent.result`; this module only writes and reads it.

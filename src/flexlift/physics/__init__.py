@@ -1,4 +1,4 @@
-"""The physical laws of the lift, each written once (SPEC §5-6).
+"""The physical laws of the lift, each written once (docs/theory/index.md).
 
 - :mod:`.gas`: lift-bag gas (isothermal ideal gas, volume at local pressure, capacity, spill
   and relief, fill, the purge orifice, buoyancy, expansion);

@@ -1,4 +1,4 @@
-"""Lift-bag gas: an ideal gas, isothermal at sea temperature (SPEC §5).
+"""Lift-bag gas: an ideal gas, isothermal at sea temperature (docs/theory/gas.md#boyle).
 
 A bag's state is its amount of gas n [mol]. At its point, ``height`` above the seabed [m] in
 water ``water_depth`` deep, the ambient pressure is p = p_atm + rho g (depth - height) [Pa]

@@ -1,4 +1,4 @@
-"""Hydrodynamics of the hull and its bags: quadratic drag and added mass (SPEC §6).
+"""Hydrodynamics of the hull and its bags: quadratic drag and added mass (docs/theory/hydrodynamics.md).
 
 - Drag: -1/2 rho C_D B |v| v per unit length of hull (strip theory on the breadth B), and
   -1/2 rho C_D,bag A |v| v at an external bag's point (A the frontal area of a sphere of the
@@ -6,7 +6,7 @@
   hull and add none). v is the velocity relative to the water (a vertical current c makes it
   w' - c).
 - Submerged weight: the structure's weight less the buoyancy of its own steel,
-  m g (1 - rho_w / rho_s) (SPEC §1: the whole displacement is treated as steel).
+  m g (1 - rho_w / rho_s) (docs/theory/hydrodynamics.md#submerged-weight: the whole displacement is treated as steel).
 - Added mass per unit length a_33 = C_a rho pi B^2 / 4, plus water entrained in flooded
   compartments; it enters the simulation's mass matrix. The bags' own mass and added mass
   are neglected against the hull's.

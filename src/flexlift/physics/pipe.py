@@ -1,4 +1,4 @@
-"""A pipeline's beam properties from its cross-section (SPEC §9.1), all in one place.
+"""A pipeline's beam properties from its cross-section (docs/theory/statics.md#pipe-section), all in one place.
 
 A section is a steel tube of outside diameter D and wall thickness t, optionally coated (a
 concrete weight coat of thickness t_c) and filled (empty, flooded with seawater, or a

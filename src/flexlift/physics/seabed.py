@@ -1,4 +1,4 @@
-"""The seabed: suction holding force and contact (SPEC §6).
+"""The seabed: suction holding force and contact (docs/theory/seabed.md).
 
 Holding force H [N], initially H_0 = (breakout_factor - 1) W'. With the net uplift U = sum
 of bag lift - W' [N]:
@@ -67,7 +67,7 @@ def holding_shape(x, length: float, stern_ratio: float = 0.5, bow_ratio: float =
 
 
 def separation_time(uplift: float, H0: float, breakout_time: float) -> float:
-    """Time to separation under a constant net ``uplift`` U [N] (SPEC §6, analytic) [s]:
+    """Time to separation under a constant net ``uplift`` U [N] (docs/theory/seabed.md#separation-time, analytic) [s]:
     T_b (H_0 / U - 1) for 0 < U < H_0, 0 for U >= H_0, infinite for U <= 0."""
     if uplift <= 0:
         return math.inf

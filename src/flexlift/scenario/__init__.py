@@ -1,4 +1,4 @@
-"""Scenario files (SPEC §1): the schema, safe YAML loading, and the built-in scenarios.
+"""Scenario files (docs/reference/scenario.md): the schema, safe YAML loading, and the built-in scenarios.
 
 - :mod:`.schema`: the pydantic model of a whole lift, units in the key names;
 - :mod:`.types`: strict, bounded numbers and names; :mod:`.file`: reading an untrusted file;

@@ -1,4 +1,4 @@
-"""The scenario's ``pipe`` section: a pipeline described by its cross-section (SPEC §9.1).
+"""The scenario's ``pipe`` section: a pipeline described by its cross-section (docs/theory/statics.md#pipe-section).
 
 Given instead of the ship's ``hull`` numbers: :func:`derive` fills the ``hull`` section (mass,
 EI and section modulus per element, the coated diameter as breadth), the explicit bags of

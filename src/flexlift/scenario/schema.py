@@ -221,7 +221,7 @@ class Lift(_Section):
 
 # --------------------------------------------------------------------------- gas
 class Gas(_Section):
-    """Lift-bag gas and its valves (SPEC §5)."""
+    """Lift-bag gas and its valves (docs/theory/gas.md)."""
 
     relief_pressure_bar: real(0.001, 10) = 0.1  # internal bags' over-pressure relief setting
     fill_rate_max_m3_s: real(1e-4, 100) = 0.5  # at the bag's local pressure
@@ -230,7 +230,7 @@ class Gas(_Section):
 
 # --------------------------------------------------------------------------- seabed
 class Seabed(_Section):
-    """Seabed contact and suction breakout (SPEC §6). H_0 = (breakout_factor - 1) W'."""
+    """Seabed contact and suction breakout (docs/theory/seabed.md). H_0 = (breakout_factor - 1) W'."""
 
     holding_shape: Literal["linear", "uniform"] = "linear"
     stern_ratio: real(0, 2) = 0.5  # holding force per length at the stern / mean (linear shape)
@@ -254,7 +254,7 @@ class Seabed(_Section):
 
 # --------------------------------------------------------------------------- hydro
 class Hydro(_Section):
-    """Drag and added mass (SPEC §6)."""
+    """Drag and added mass (docs/theory/hydrodynamics.md)."""
 
     drag_coefficient: real(0, 10) = 1.2  # hull strip theory, on the breadth (bluff bodies ~1-2)
     bag_drag_coefficient: real(0, 10) = 1.0  # on the bag's frontal area
@@ -277,7 +277,7 @@ FisFile = Annotated[str, StringConstraints(min_length=5, max_length=4096),
 
 
 class Supervisor(_Section):
-    """The supervisory Mamdani controller (SPEC §7)."""
+    """The supervisory Mamdani controller (docs/theory/control.md#supervisor)."""
 
     error_scale_m: real(0.01, 10_000) = 5.0
     rate_scale_m_s: real(0.001, 100) = 0.1
@@ -320,7 +320,7 @@ class Coordination(_Section):
 
 
 class Sequence(_Section):
-    """A staged lift (SPEC §9.1): every bag pulls until the suction lets go; then the external
+    """A staged lift (docs/theory/statics.md#staged): every bag pulls until the suction lets go; then the external
     bags begin their ascent in groups, one group every ``delay_s`` (the first at once), each
     from where it is; until its start a bag is passive and only holds its share of the weight
     (its neutral volume), so the structure peels off the seabed from one end. Either
@@ -338,7 +338,7 @@ ControlMode = Literal["decentralized", "coordinated", "paper", "open-loop"]
 
 
 class Control(_Section):
-    """Ascent plan and the controllers (SPEC §7)."""
+    """Ascent plan and the controllers (docs/theory/control.md)."""
 
     mode: ControlMode = "decentralized"
     sample_rate_Hz: real(0.01, 1_000) = 10.0
@@ -366,7 +366,7 @@ class Control(_Section):
 
 
 class Limits(_Section):
-    """Acceptance criteria (SPEC §1, §7)."""
+    """Acceptance criteria (docs/theory/factors.md#criteria)."""
 
     ascent_velocity_m_s: real(0.001, 100) = 0.6  # the largest upward speed of any bag point
     descent_velocity_m_s: real(0.001, 100) = 0.6  # the largest downward speed once separated
@@ -430,7 +430,7 @@ class Disturbance(_Section):
 
 # --------------------------------------------------------------------------- simulation
 class Simulation(_Section):
-    """The time-domain run (SPEC §8)."""
+    """The time-domain run (docs/theory/loop.md)."""
 
     # stops earlier once the target has been held for hold_time_s; auto: runs until then, at
     # most the longest run the limits below allow (longest_run_s)

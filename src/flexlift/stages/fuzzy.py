@@ -1,4 +1,4 @@
-"""The fuzzy stage (SPEC §7): the supervisory controller (built in, or a MATLAB ``.fis``)
+"""The fuzzy stage (docs/theory/control.md#supervisor): the supervisory controller (built in, or a MATLAB ``.fis``)
 evaluated, tabulated and drawn, as data, figures and tables.
 """
 
@@ -102,7 +102,7 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
                for v in fis.outputs]
     summary: dict = {
         "system": fis.name,
-        "source": str(fis_file) if fis_file is not None else "built-in (SPEC §7)",
+        "source": str(fis_file) if fis_file is not None else "built-in (docs/theory/control.md#rule-table)",
         "inputs": [{"name": v.name, "range": list(v.range), "sets": list(v.labels)}
                    for v in fis.inputs],
         **({"output": outputs[0]} if fis.n_outputs == 1 else {"outputs": outputs}),
@@ -128,7 +128,7 @@ def run_stage(scenario, out: Path | None = None, fis_file: str | Path | None = N
             criteria["surface_odd_symmetric"] = summary["symmetry_error"] < 1e-9
     if own:
         fill = fill_map_of(scenario)
-        summary["fill_map_source"] = scenario.control.fill.fis_file or "built-in (SPEC §7)"
+        summary["fill_map_source"] = scenario.control.fill.fis_file or "built-in (docs/theory/control.md#sifsmc)"
         summary["fill_map"] = {"d": [-1.0, 0.0, 0.25, 0.5, 0.75, 1.0],
                                "fill": [fill(d) for d in (-1.0, 0.0, 0.25, 0.5, 0.75, 1.0)]}
     tables = [_rule_table(fis), _sets_table(fis)]

@@ -1,4 +1,4 @@
-"""The lift-plan stage (SPEC §1, §3): bag count and layout, and the hull's static shear force
+"""The lift-plan stage (docs/theory/factors.md#bag-count): bag count and layout, and the hull's static shear force
 and bending moment under the plan, as data, figures and tables.
 """
 

@@ -1,4 +1,4 @@
-"""The modal stage (SPEC §2): frequencies and mode shapes of the hull as a free-free beam, dry
+"""The modal stage (docs/theory/modes.md): frequencies and mode shapes of the hull as a free-free beam, dry
 and wet (with the added mass and entrained water the ascent integrates), the nodes of its
 first flexible modes, and the convergence study, as data, figures and tables.
 
@@ -92,7 +92,7 @@ def summary_of(scenario, modes: Modes, conv: Convergence | None, solver: str,
         "wet_extra_mass_per_length_kg_m": wet_extra_kg_m,
         "mesh_resolved_flexible_modes": mesh_resolved(modes),
         "rigid_modes": modes.n_rigid,
-        # the solver returns only the modes it resolves to SPEC section 2 (flexlift.structure.modes)
+        # the solver returns only the modes it resolves to docs/theory/modes.md#mass-normalisation (flexlift.structure.modes)
         "modes_requested": modes.n_requested or modes.n_modes,
         "modes_resolved": modes.n_modes,
         "mode_nodes": _nodes_of(modes),

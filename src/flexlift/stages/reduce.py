@@ -1,4 +1,4 @@
-"""The state-space stage (SPEC §4): each bag's modal model, mode ranking by gain, and the four
+"""The state-space stage (docs/theory/reduction.md): each bag's modal model, mode ranking by gain, and the four
 reductions compared with the full model, as data, figures and tables.
 """
 

@@ -1,4 +1,4 @@
-"""The ascent stage (SPEC §5-8): one control mode simulated, its results written (netCDF, CSV,
+"""The ascent stage (docs/theory/loop.md): one control mode simulated, its results written (netCDF, CSV,
 figures), and control modes compared.
 """
 

@@ -69,7 +69,7 @@ _SQRT3 = np.sqrt(3.0)
 _DENSE_BELOW = 64
 #: up to this many columns, products of tall blocks are computed without BLAS
 _FEW_COLUMNS = 64
-#: SPEC section 2: Phi^T M Phi = I and Phi^T K Phi = diag(omega^2) to this (each entry of the
+#: docs/theory/modes.md#mass-normalisation: Phi^T M Phi = I and Phi^T K Phi = diag(omega^2) to this (each entry of the
 #: latter relative to the larger omega^2 of its pair); modes that miss it are not resolved [-]
 GRAM_TOL = 1e-10
 #: largest model (DOFs) solved densely (~130 MB per dense matrix)
@@ -381,7 +381,7 @@ def sparse_flexible(
     """Lowest ``n_flex`` flexible eigenvalues lambda = omega^2 [rad^2/s^2] (ascending), their
     M-orthonormal mode shapes V (N, n_flex) in the M-orthogonal complement of the rigid modes
     R, and the error err (n_flex,) of the Gram matrices up to each mode
-    (:func:`orthonormalised`): the modes with err <= GRAM_TOL meet SPEC section 2. Fewer
+    (:func:`orthonormalised`): the modes with err <= GRAM_TOL meet docs/theory/modes.md#mass-normalisation Fewer
     columns come back if the solver's vectors were linearly dependent.
 
     method : "flexibility" (default when K is the hull's own stiffness: the flexibility form,

@@ -43,7 +43,7 @@ class Modes:
     hull : Hull — the structure
     n_rigid : int — number of rigid modes (2 for a free-free beam)
     n_requested : int — modes asked for, rigid included; ``n_modes`` (those returned) is
-        smaller when the solver could not resolve the highest ones to SPEC section 2 [-]
+        smaller when the solver could not resolve the highest ones to docs/theory/modes.md#mass-normalisation [-]
     diagnostics : dict — what the solve had to correct: ``clipped_eigenvalues``, a list of
         (flexible mode number 1.., omega^2 [rad^2/s^2]) of round-off negatives set to 0
         (:data:`NEGATIVE_EIGENVALUE_TOL`)
@@ -213,7 +213,7 @@ def compute_modes(
 
     Notes
     -----
-    The sparse solver checks SPEC section 2 on what it returns: Phi^T M Phi = I and
+    The sparse solver checks docs/theory/modes.md#mass-normalisation on what it returns: Phi^T M Phi = I and
     Phi^T K Phi = diag(omega^2) to GRAM_TOL (1e-10, relative to the larger omega^2 of each
     pair). When the highest requested modes miss it (many modes of a very fine mesh: the
     flexibility form resolves mode k only to ~eps omega_k^2 / omega_1^2), only the modes

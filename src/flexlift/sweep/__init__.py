@@ -1,4 +1,4 @@
-"""Sweeps and Monte Carlo (SPEC §9.2): many ascents of one base scenario, and what they add
+"""Sweeps and Monte Carlo (docs/theory/sweeps.md): many ascents of one base scenario, and what they add
 up to.
 
 - :mod:`.spec`: the SPEC file (a base scenario, fixed overrides, a grid or a Monte Carlo);
