@@ -262,3 +262,15 @@ def test_the_adapted_neutral_volume_removes_the_steady_error(tanker):
     on = simulate(fine)
     assert all(on.criteria.values())
     assert np.abs(on.dataset.height.values[-1] - 300.0).max() < 0.05
+
+
+def test_the_progress_bar_moves_evenly_to_the_end():
+    """The fraction follows the plan's expected run (separation, rise, hold), so the tanker's
+    bar does not sit at two thirds and jump to 100 % when the target has been held."""
+    from flexlift.ascent import simulate
+    from flexlift.scenario import load_scenario
+
+    seen = []
+    simulate(load_scenario("tanker"), control="coordinated", progress=seen.append)
+    assert seen[-1] == 1.0 and seen == sorted(seen)
+    assert seen[-2] >= 0.9, seen[-5:]  # the last update before the end

@@ -155,16 +155,24 @@ def _separations(scenario, plant):
     return V_pull, held, times, fills
 
 
+def planned_run(scenario, plant) -> tuple[float, float, float]:
+    """(the last separation, the rise to the target, the whole run with the hold) [s] as the
+    plan expects them: the breakout check's separation times, the ascent at the planned speed
+    where the purge valves keep up and at their limit where not, ``simulation.hold_time_s``
+    (inf when the pull never separates the hull)."""
+    from flexlift.ascent.outcome import remaining_ascent_s
+
+    t_sep = max(_separations(scenario, plant)[2]) if float(plant.seabed.H0.sum()) > 0 else 0.0
+    rise = remaining_ascent_s(scenario, plant, 0.0)
+    return t_sep, rise, t_sep + rise + scenario.simulation.hold_time_s
+
+
 def duration_check(scenario, plant) -> Check:
     """Whether the run is long enough for the plan: the last separation (the breakout check's
     estimate), the ascent to the target at the planned speed where the purge valves keep up
     and at their limit where not, and the hold (``simulation.hold_time_s``)."""
-    from flexlift.ascent.outcome import remaining_ascent_s
-
     sim = scenario.simulation
-    t_sep = max(_separations(scenario, plant)[2]) if float(plant.seabed.H0.sum()) > 0 else 0.0
-    rise = remaining_ascent_s(scenario, plant, 0.0)
-    need = t_sep + rise + sim.hold_time_s
+    t_sep, rise, need = planned_run(scenario, plant)
     if not math.isfinite(need):
         return Check("duration", False, "the pull never separates the hull (the breakout check "
                      "says why), so no run is long enough: the plan cannot finish")

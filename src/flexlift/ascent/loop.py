@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from flexlift.ascent import kernel
-from flexlift.ascent.checks import refuse_unworkable, warn_short
+from flexlift.ascent.checks import planned_run, refuse_unworkable, warn_short
 from flexlift.ascent.faults import apply_fault, check_faults, fault_step
 from flexlift.ascent.noise import ForceNoise, MeasurementNoise
 from flexlift.ascent.paper import paper_plant
@@ -138,6 +138,14 @@ class Ascent:
         self.fault_events: list[tuple[float, str, str, str]] = []
         self._initial_state()
 
+    def _expected_steps(self) -> int:
+        """The steps the run is expected to take (for an even progress bar): the plan's
+        separation, rise and hold (:func:`flexlift.ascent.checks.planned_run`), at most the
+        run's length; the run's length when the plan cannot say."""
+        need = planned_run(self.scenario, self.plant)[2]
+        steps = self.settings.n_steps
+        return min(steps, math.ceil(need / self.settings.dt)) if math.isfinite(need) else steps
+
     def inputs(self) -> LoopInputs:
         """The compiled loop's records, as they are now (the switches' noise changes between
         chunks)."""
@@ -157,6 +165,7 @@ class Ascent:
     def run(self, progress=None) -> Result:
         settings, state, recorder = self.settings, self.state, self.recorder
         fi, error = 0, None
+        whole = self._expected_steps() if progress is not None else settings.n_steps
         while state.counters[0] <= settings.n_steps:
             k = int(state.counters[0])
             while fi < len(self.faults) and fault_step(self.faults[fi], settings.dt) <= k:
@@ -168,8 +177,8 @@ class Ascent:
             self._noise(k, k_stop)
             self._room(k_stop)
             code = self._advance(k_stop)
-            if progress is not None:
-                progress(min(state.counters[0] / max(settings.n_steps, 1), 1.0))
+            if progress is not None:  # 100 % only at the end, whenever that comes
+                progress(min(state.counters[0] / max(whole, 1), 0.99))
             if code == RET_STOP:
                 break
         if recorder.ev_code[:recorder.counts[2]].tolist().count(EV_NUMERICS):
