@@ -30,6 +30,7 @@ import ast
 import math
 import operator
 import re
+import warnings
 
 import numpy as np
 
@@ -211,9 +212,13 @@ def _arithmetic(token: str) -> float:
         raise ValueError(token)
 
     try:
-        result = value(ast.parse(token, mode="eval").body)
-    except (SyntaxError, ValueError, ZeroDivisionError, OverflowError, RecursionError,
-            MemoryError, TypeError):
+        with warnings.catch_warnings():  # Python's SyntaxWarning ("invalid decimal literal")
+            warnings.simplefilter("ignore")  # would be a second line on stderr
+            tree = ast.parse(token, mode="eval")
+        result = value(tree.body)
+    except OverflowError:
+        raise _NotANumber(f"{shown} overflows") from None
+    except (SyntaxError, ValueError, ZeroDivisionError, RecursionError, MemoryError, TypeError):
         raise _NotANumber(f"{shown} is not a number") from None
     if not isinstance(result, float):  # a negative number to a fractional power: complex
         raise _NotANumber(f"{shown} is not a real number")

@@ -164,9 +164,12 @@ def exists(path: str | os.PathLike) -> bool:
 
 
 def absolute(path: str | os.PathLike) -> str:
-    """``path`` made absolute, symbolic links resolved where they resolve: a link that loops
-    is kept as written (absolute), so that reading it is refused with one line."""
+    """``path`` made absolute: the folders on its way resolved (symbolic links followed), its
+    own name kept as written, so that a link to a device or a link that loops is still named
+    by the user's name when reading it is refused. Never an exception (``Path.resolve`` raises
+    RuntimeError for a loop before Python 3.13): a folder that cannot be resolved is kept too."""
+    p = Path(path)
     try:
-        return str(Path(path).resolve())
-    except (OSError, RuntimeError, ValueError):  # RuntimeError: a symlink loop (Python < 3.13)
-        return os.path.abspath(path)
+        return str(p.parent.resolve() / p.name)
+    except (OSError, RuntimeError, ValueError):
+        return str(p.absolute())
