@@ -42,13 +42,15 @@ NASTY = ["inf", "-inf", "nan", "NaN", "1e999", "-1e999", "1e308", "-1.7e308", "1
          "(" * 200 + "1" + ")" * 200, "1" * 400, "1e", "--1", "\u00e9", "\x00", "\xff"]
 #: a number in a list, a range, a rule or after "=" (not the 1 of [Input1])
 _NUMBER = re.compile(rb"(?<=[\[\s(=,])-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?=[\s\]),:]|$)", re.M)
+#: the set indices and weights of a rule line ("1 2, 3 (1) : 1")
+_RULE_NUMBER = re.compile(rb"(?<=[\s(,])-?\d+(?:\.\d+)?(?=[\s,)])")
 
 
 @st.composite
 def mutated(draw) -> bytes:
     data = bytearray(draw(st.sampled_from(TEXTS)))
     for _ in range(draw(st.integers(1, 3))):
-        op = draw(st.sampled_from(("truncate", "flip", "number", "number", "number", "insert")))
+        op = draw(st.sampled_from(("truncate", "flip", "number", "number", "rule", "insert")))
         if op == "truncate" and data:  # mostly in the rules and the last sets
             del data[draw(st.integers(len(data) // 2, len(data) - 1)):]
         elif op == "flip" and data:
@@ -60,6 +62,12 @@ def mutated(draw) -> bytes:
                 m = draw(st.sampled_from(found))
                 data[m.start():m.end()] = draw(st.sampled_from(NASTY)).encode("utf-8", "ignore") \
                     if draw(st.booleans()) else draw(st.sampled_from(NASTY)).encode("latin-1")
+        elif op == "rule":
+            start = bytes(data).find(b"[Rules]")
+            found = list(_RULE_NUMBER.finditer(bytes(data), max(start, 0))) if start >= 0 else []
+            if found:
+                m = draw(st.sampled_from(found))
+                data[m.start():m.end()] = draw(st.sampled_from(NASTY)).encode("utf-8")
         elif op == "insert":
             i = draw(st.integers(0, len(data)))
             data[i:i] = draw(st.sampled_from(NASTY)).encode("utf-8")

@@ -34,7 +34,7 @@ import warnings
 
 import numpy as np
 
-from flexlift.errors import InputError, clean
+from flexlift.errors import LINE_LIMIT, InputError, clean
 from flexlift.fuzzy.system import (
     AGGREGATIONS,
     ALL_KINDS,
@@ -227,7 +227,18 @@ def _arithmetic(token: str) -> float:
 
 def parse_fis(text: str, source: str = ".fis", resolution: int = 101,
               out_of_range: str = "clip") -> FIS:
-    """A :class:`FIS` from MATLAB ``.fis`` text; ``source`` names it in error messages."""
+    """A :class:`FIS` from MATLAB ``.fis`` text; ``source`` names it in error messages, which
+    are one line of at most :data:`~flexlift.errors.LINE_LIMIT` characters (a name or a value
+    of a hostile file's thousands of characters is shortened in the middle)."""
+    try:
+        return _parse(text, source, resolution, out_of_range)
+    except InputError as exc:
+        if len(str(exc)) <= LINE_LIMIT:
+            raise
+        raise InputError.from_line(clean(str(exc), LINE_LIMIT)) from None
+
+
+def _parse(text: str, source: str, resolution: int, out_of_range: str) -> FIS:
     rd = _Reader(text, source)
     system, _ = rd.keys("System", SYSTEM_KEYS,
                         "a .fis file needs [System], [Input1..N], [Output1..M], [Rules]")
@@ -246,8 +257,8 @@ def parse_fis(text: str, source: str = ".fis", resolution: int = 101,
             other = [k for k, v in allowed.items() if value in v]
             what = (f"is for Type='{other[0]}' systems" if other else
                     f"is a custom {_ROLE[key]} flexlift cannot know")
-            rd.fail(system[key][0], f"{key}='{value}'",
-                    f"'{value}' {what}; allowed for Type='{kind}': {', '.join(allowed[kind])}")
+            rd.fail(system[key][0], f"{key}='{value}'", f"'{clean(value, 40)}' {what}; allowed "
+                    f"for Type='{kind}': {', '.join(allowed[kind])}")
         options[attr] = value
     inputs = tuple(_variable(rd, f"Input{i}", kind, n_in, True) for i in range(1, n_in + 1))
     outputs = tuple(_variable(rd, f"Output{i}", kind, n_in, False)
@@ -321,8 +332,8 @@ def _mf(rd: _Reader, n: int, line: str, spec: str, kind: str, n_in: int, is_inpu
         rd.fail(n, line, "MFk='name':'type',[p1 p2 ...]")
     mf_kind = m["kind"]
     if mf_kind not in ALL_KINDS:
-        rd.fail(n, line, f"membership function type '{mf_kind}' is a custom function (or another "
-                         f"tool's) flexlift cannot know; allowed: {', '.join(ALL_KINDS)}")
+        rd.fail(n, line, f"membership function type '{clean(mf_kind, 40)}' is a custom function "
+                         f"(or another tool's) flexlift cannot know; allowed: {', '.join(ALL_KINDS)}")
     if is_input or kind == "mamdani":
         if mf_kind not in MF_KINDS:
             rd.fail(n, line, f"'{mf_kind}' is a Sugeno output function; input and Mamdani output "
