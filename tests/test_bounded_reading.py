@@ -436,3 +436,15 @@ def test_a_sugeno_supervisor_within_the_limits_is_accepted_and_finite(tmp_path, 
         warnings.simplefilter("error")
         u = fis(np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 0.0], [1.0, 1.0]]))
     assert np.all(np.isfinite(u))
+
+
+def test_a_hostile_name_never_makes_a_message_longer_than_a_line(tmp_path):
+    from flexlift.errors import LINE_LIMIT
+
+    text = GOOD.replace("Name='e'", "Name='" + "e" * 5000 + "'", 1).replace(
+        RULE, "7.5" + RULE[1:], 1)
+    with pytest.raises(InputError) as e:
+        read_fis(_fis_file(tmp_path, text))
+    msg = str(e.value)
+    assert len(msg) <= LINE_LIMIT and "\n" not in msg, msg
+    assert msg.startswith("bad.fis line") and msg.endswith("which flexlift does not support")
