@@ -179,7 +179,7 @@ def test_missing_parts_name_the_file(old, new, match):
 
 
 def test_missing_file(tmp_path):
-    with pytest.raises(InputError, match="readable"):
+    with pytest.raises(InputError, match="no such file"):
         read_fis(tmp_path / "nope.fis")
 
 

@@ -571,6 +571,39 @@ def test_bad_spec_is_one_line_and_exit_2(change, needles, tmp_path, capsys):
     assert not out.exists()
 
 
+FIS_KEY = "control.supervisor.fis_file"
+
+
+@pytest.mark.parametrize("where, data, needles", [
+    ("a choice", {"monte_carlo": {"samples": 2, "seed": 1, "vary": {FIS_KEY: {
+        "dist": "choice", "values": ["good.fis", "missing.fis"]}}}},
+     ["monte_carlo.vary.control.supervisor.fis_file", "missing.fis: no such file"]),
+    ("a grid", {"grid": {FIS_KEY: ["good.fis", "missing.fis"]}},
+     ["grid.control.supervisor.fis_file", "missing.fis: no such file"]),
+    ("set", {"set": {FIS_KEY: "missing.fis"}, "grid": {"seabed.breakout_time_s": [300]}},
+     ["set: control.supervisor.fis_file", "missing.fis: no such file"]),
+    ("a file for the other role", {"set": {"control.fill.fis_file": "good.fis"},
+                                   "grid": {"seabed.breakout_time_s": [300]}},
+     ["control.fill.fis_file", "a fill .fis has one input"]),
+    ("a bad number", {"set": {FIS_KEY: "inf.fis"}, "grid": {"seabed.breakout_time_s": [300]}},
+     ["inf.fis line", "NumInputs=inf", "whole number"]),
+])
+def test_every_fis_file_a_spec_names_is_checked_before_the_first_case(where, data, needles,
+                                                                       tmp_path, capsys, tanker):
+    from flexlift.fuzzy.fis import to_fis_text
+    from flexlift.fuzzy.rulebase import supervisor_fis_from
+
+    good = to_fis_text(supervisor_fis_from(tanker.control.supervisor))
+    (tmp_path / "good.fis").write_text(good)
+    (tmp_path / "inf.fis").write_text(good.replace("NumInputs=2", "NumInputs=inf"))
+    spec = write_spec(tmp_path / "s.yaml", {"base": "tanker", "control": ["coordinated"],
+                                            **data})
+    out = tmp_path / "o"
+    assert main(["sweep", str(spec), "--out", str(out)]) == 2  # not one failed case each
+    one_line(capsys, "flexlift sweep: error:", *needles)
+    assert not out.exists()
+
+
 def test_a_large_sweep_needs_yes(tmp_path):
     data = mc(samples=200_000)
     with pytest.raises(Exception, match="--yes"):

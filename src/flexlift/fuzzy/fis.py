@@ -26,9 +26,10 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
-from flexlift.errors import InputError
+from flexlift.errors import InputError, clean
 from flexlift.fuzzy.fis_parse import METHODS, parse_fis
 from flexlift.fuzzy.system import FIS, MF
+from flexlift.plumbing import reading
 from flexlift.plumbing.atomic import write_text
 
 ROLES = ("supervisor", "fill")
@@ -69,12 +70,10 @@ def write_fis(fis: FIS, path: str | os.PathLike) -> Path:
 
 
 def read_fis(path: str | os.PathLike, resolution: int = 101, out_of_range: str = "clip") -> FIS:
-    """Read a MATLAB ``.fis`` file into a :class:`FIS`."""
+    """Read a MATLAB ``.fis`` file into a :class:`FIS`: a regular UTF-8 file of at most 1 MB
+    (:mod:`flexlift.plumbing.reading`), else one InputError line naming it."""
+    text = reading.read_text(path, clean(os.fspath(path), 120), reading.FIS)
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
-        raise InputError("--fis", str(path), f"a readable .fis file ({exc.strerror})") from None
     return from_fis_text(text, resolution=resolution, source=path.name, out_of_range=out_of_range)
 
 

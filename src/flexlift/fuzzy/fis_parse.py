@@ -13,6 +13,15 @@ shipped example, slcp1.fis, has two ``MF2`` lines). Everything else is refused w
 naming the file, the line and what is allowed: custom operators and membership functions (a
 MATLAB function of the user's, or another tool's type), hedges (Octave's fractional indices),
 other system types, type-2 sets.
+
+Numbers and counts have limits, so that a hostile file is refused with one line rather than
+ending in an overflow, a recursion error or a system that evaluates to NaN: every number (a
+range end, a parameter, a weight, an index) is finite and within ±:data:`MAX_MAGNITUDE`; an
+arithmetic number (``-pi/4``) has at most :data:`MAX_EXPRESSION` characters; the counts
+``NumInputs``, ``NumOutputs`` (1..:data:`MAX_VARIABLES`), ``NumMFs`` (0..:data:`MAX_MFS`)
+and ``NumRules`` (0..:data:`MAX_RULES`) are whole numbers; and every membership function is
+finite over its variable's range (sampled at 101 points and at each of its parameters inside
+the range, where a kernel divides by a width or a sigma).
 """
 
 from __future__ import annotations
@@ -21,8 +30,11 @@ import ast
 import math
 import operator
 import re
+import warnings
 
-from flexlift.errors import InputError
+import numpy as np
+
+from flexlift.errors import LINE_LIMIT, InputError, clean
 from flexlift.fuzzy.system import (
     AGGREGATIONS,
     ALL_KINDS,
@@ -62,6 +74,19 @@ _MF_LINE = re.compile(
 _RULE_LINE = re.compile(
     r"^(?P<ante>[-+\d.eE\s]+),(?P<cons>[-+\d.eE\s]+)\((?P<weight>[^)]*)\)\s*:\s*(?P<conn>\S+)$")
 _LEGACY_WIDTH = 4  # old writers padded every parameter list to four numbers
+#: largest magnitude of any number in a .fis file: sums and products of such numbers over a
+#: range stay finite (a linear output a1 x1 + .. + c, a centroid over the output grid)
+MAX_MAGNITUDE = 1e100
+#: longest arithmetic number [characters] (``-pi/4``; deeper arithmetic is not a .fis number)
+MAX_EXPRESSION = 100
+#: most inputs, and most outputs, of a system
+MAX_VARIABLES = 100
+#: most membership functions of one variable
+MAX_MFS = 1_000
+#: most rules (more than a 1 MB file can hold)
+MAX_RULES = 100_000
+#: points at which each membership function is checked to be finite over its range
+_SAMPLES = 101
 
 
 def _strip(raw: str) -> str:
@@ -97,7 +122,7 @@ class _Reader:
                 self.sections[current].append((n, line))
 
     def fail(self, n, line, allowed):
-        raise InputError(f"{self.source} line {n}", line, allowed)
+        raise InputError(f"{self.source} line {n}", clean(line, 120), allowed)
 
     def keys(self, name: str, allowed: tuple[str, ...], needs: str):
         """Key=value lines of a section as {key: (line number, value)}, and its MF lines."""
@@ -126,21 +151,26 @@ class _Reader:
         v = d[key][1]
         return v[1:-1] if len(v) >= 2 and v[0] == v[-1] and v[0] in "'\"" else v
 
-    def count(self, d, key, where):
+    def count(self, d, key, where, most):
         v = self.string(d, key, where)
         try:
             x = float(v)
         except ValueError:
             x = -1.0
-        if x != int(x) or x < 0:
-            self.fail(d[key][0], f"{key}={v}", f"{key} must be a whole number >= 0")
+        if not math.isfinite(x) or x != int(x) or not 0 <= x <= most:
+            self.fail(d[key][0], f"{key}={v}", f"{key} must be a whole number 0..{most:,}")
         return int(x)
 
     def numbers(self, text, n, line):
         try:
             return tuple(_number(t) for t in text.replace(",", " ").split())
-        except ValueError:
-            self.fail(n, line, "numbers separated by spaces (pi and + - * / ^ allowed)")
+        except _NotANumber as exc:
+            self.fail(n, line, f"{exc}; numbers are separated by spaces, finite and within "
+                               f"±{MAX_MAGNITUDE:g} (pi and + - * / ^ allowed)")
+
+
+class _NotANumber(ValueError):
+    """A token that is not a number a .fis file may hold; the message says why."""
 
 
 _BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
@@ -149,11 +179,25 @@ _BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
 
 def _number(token: str) -> float:
     """A number as MATLAB's reader evaluates it: a literal, or arithmetic on literals and pi
-    (the shipped sltbu.fis writes Range=[-pi/4 pi/4])."""
+    (the shipped sltbu.fis writes Range=[-pi/4 pi/4]); finite and within ±MAX_MAGNITUDE."""
+    shown = clean(token, 40)
     try:
-        return float(token)
+        result = float(token)
     except ValueError:
-        pass
+        result = _arithmetic(token)
+    if not math.isfinite(result):
+        raise _NotANumber(f"{shown} is not finite")
+    if abs(result) > MAX_MAGNITUDE:
+        raise _NotANumber(f"{shown} is beyond ±{MAX_MAGNITUDE:g}")
+    return result
+
+
+def _arithmetic(token: str) -> float:
+    """The value of arithmetic on literals and pi (at most MAX_EXPRESSION characters)."""
+    shown = clean(token, 40)
+    if len(token) > MAX_EXPRESSION:
+        raise _NotANumber(f"{shown} is arithmetic of {len(token):,} characters (at most "
+                          f"{MAX_EXPRESSION})")
 
     def value(node):
         if isinstance(node, ast.Constant) and type(node.value) in (int, float):
@@ -168,25 +212,41 @@ def _number(token: str) -> float:
         raise ValueError(token)
 
     try:
-        result = value(ast.parse(token, mode="eval").body)
-    except (SyntaxError, ZeroDivisionError, OverflowError):
-        raise ValueError(token) from None
-    if not math.isfinite(result):
-        raise ValueError(token)
+        with warnings.catch_warnings():  # Python's SyntaxWarning ("invalid decimal literal")
+            warnings.simplefilter("ignore")  # would be a second line on stderr
+            tree = ast.parse(token, mode="eval")
+        result = value(tree.body)
+    except OverflowError:
+        raise _NotANumber(f"{shown} overflows") from None
+    except (SyntaxError, ValueError, ZeroDivisionError, RecursionError, MemoryError, TypeError):
+        raise _NotANumber(f"{shown} is not a number") from None
+    if not isinstance(result, float):  # a negative number to a fractional power: complex
+        raise _NotANumber(f"{shown} is not a real number")
     return result
 
 
 def parse_fis(text: str, source: str = ".fis", resolution: int = 101,
               out_of_range: str = "clip") -> FIS:
-    """A :class:`FIS` from MATLAB ``.fis`` text; ``source`` names it in error messages."""
+    """A :class:`FIS` from MATLAB ``.fis`` text; ``source`` names it in error messages, which
+    are one line of at most :data:`~flexlift.errors.LINE_LIMIT` characters (a name or a value
+    of a hostile file's thousands of characters is shortened in the middle)."""
+    try:
+        return _parse(text, source, resolution, out_of_range)
+    except InputError as exc:
+        if len(str(exc)) <= LINE_LIMIT:
+            raise
+        raise InputError.from_line(clean(str(exc), LINE_LIMIT)) from None
+
+
+def _parse(text: str, source: str, resolution: int, out_of_range: str) -> FIS:
     rd = _Reader(text, source)
     system, _ = rd.keys("System", SYSTEM_KEYS,
                         "a .fis file needs [System], [Input1..N], [Output1..M], [Rules]")
     kind = rd.string(system, "Type", "System").lower()
     if kind not in KINDS:
         rd.fail(system["Type"][0], f"Type='{kind}'", "Type='mamdani' or Type='sugeno'")
-    n_in = rd.count(system, "NumInputs", "System")
-    n_out = rd.count(system, "NumOutputs", "System")
+    n_in = rd.count(system, "NumInputs", "System", MAX_VARIABLES)
+    n_out = rd.count(system, "NumOutputs", "System", MAX_VARIABLES)
     if n_in < 1 or n_out < 1:
         which = "NumInputs" if n_in < 1 else "NumOutputs"
         rd.fail(system[which][0], f"{which}={n_in if n_in < 1 else n_out}", f"{which} >= 1")
@@ -197,22 +257,51 @@ def parse_fis(text: str, source: str = ".fis", resolution: int = 101,
             other = [k for k, v in allowed.items() if value in v]
             what = (f"is for Type='{other[0]}' systems" if other else
                     f"is a custom {_ROLE[key]} flexlift cannot know")
-            rd.fail(system[key][0], f"{key}='{value}'",
-                    f"'{value}' {what}; allowed for Type='{kind}': {', '.join(allowed[kind])}")
+            rd.fail(system[key][0], f"{key}='{value}'", f"'{clean(value, 40)}' {what}; allowed "
+                    f"for Type='{kind}': {', '.join(allowed[kind])}")
         options[attr] = value
     inputs = tuple(_variable(rd, f"Input{i}", kind, n_in, True) for i in range(1, n_in + 1))
     outputs = tuple(_variable(rd, f"Output{i}", kind, n_in, False)
                     for i in range(1, n_out + 1))
     rules = _rules(rd, inputs, outputs, kind)
-    if "NumRules" in system and rd.count(system, "NumRules", "System") != len(rules):
-        rd.fail(system["NumRules"][0], f"NumRules={rd.count(system, 'NumRules', 'System')}",
+    declared = rd.count(system, "NumRules", "System", MAX_RULES) if "NumRules" in system else None
+    if declared is not None and declared != len(rules):
+        rd.fail(system["NumRules"][0], f"NumRules={declared}",
                 f"the [Rules] section has {len(rules)} rules")
+    if len(rules) > MAX_RULES:
+        raise InputError(source, f"{len(rules):,} rules", f"at most {MAX_RULES:,}")
     name = rd.string(system, "Name", "System", default=source.rsplit(".", 1)[0])
     try:
-        return FIS(name, inputs, outputs, rules, resolution=resolution, kind=kind,
-                   out_of_range=out_of_range, **options)
+        fis = FIS(name, inputs, outputs, rules, resolution=resolution, kind=kind,
+                  out_of_range=out_of_range, **options)
     except InputError as exc:
         raise InputError(source, "system", str(exc)) from None
+    _check_finite(fis, source)
+    return fis
+
+
+def _check_finite(fis: FIS, source: str) -> None:
+    """Refuse a system with a membership function that is not finite somewhere on its
+    variable's range: sampled at :data:`_SAMPLES` points, at each of its parameters inside the
+    range (where a kernel divides by a width or a sigma) and, for a Mamdani output, on the
+    output grid the inference uses. (A Sugeno output function is finite there by the limit
+    on its coefficients.)"""
+    titled = [(f"Input{i}", v, ()) for i, v in enumerate(fis.inputs, 1)]
+    if fis.kind == "mamdani":
+        titled += [(f"Output{i}", v, g) for i, (v, g) in
+                   enumerate(zip(fis.outputs, fis.output_grids), 1)]
+    with np.errstate(all="ignore"):
+        for title, var, grid in titled:
+            lo, hi = var.range
+            for m in var.mfs:
+                inside = [p for p in m.params if lo <= p <= hi]
+                x = np.concatenate([np.linspace(lo, hi, _SAMPLES), inside, grid])
+                mu = np.asarray(m(x), dtype=float)
+                bad = ~np.isfinite(mu)
+                if bad.any():
+                    raise InputError(f"{source} [{title}] {var.name!r} set {m.name!r}",
+                                     f"{m.kind} {list(m.params)}", f"a set finite over the range "
+                                     f"[{lo:g}, {hi:g}]; it is {mu[bad][0]} at {x[bad][0]:g}")
 
 
 def _variable(rd: _Reader, title: str, kind: str, n_in: int, is_input: bool) -> Variable:
@@ -224,7 +313,7 @@ def _variable(rd: _Reader, title: str, kind: str, n_in: int, is_input: bool) -> 
     lo_hi = rd.numbers(rng.strip("[]"), n_r, f"Range={rng}")
     if len(lo_hi) != 2:
         rd.fail(n_r, f"Range={rng}", f"[{title}] needs Range=[lo hi]")
-    count = rd.count(d, "NumMFs", title)
+    count = rd.count(d, "NumMFs", title, MAX_MFS)
     if len(lines) != count:
         where = lines[count][0] if len(lines) > count else d["NumMFs"][0]
         rd.fail(where, f"NumMFs={count}", f"[{title}] has {len(lines)} MF lines")
@@ -243,8 +332,8 @@ def _mf(rd: _Reader, n: int, line: str, spec: str, kind: str, n_in: int, is_inpu
         rd.fail(n, line, "MFk='name':'type',[p1 p2 ...]")
     mf_kind = m["kind"]
     if mf_kind not in ALL_KINDS:
-        rd.fail(n, line, f"membership function type '{mf_kind}' is a custom function (or another "
-                         f"tool's) flexlift cannot know; allowed: {', '.join(ALL_KINDS)}")
+        rd.fail(n, line, f"membership function type '{clean(mf_kind, 40)}' is a custom function "
+                         f"(or another tool's) flexlift cannot know; allowed: {', '.join(ALL_KINDS)}")
     if is_input or kind == "mamdani":
         if mf_kind not in MF_KINDS:
             rd.fail(n, line, f"'{mf_kind}' is a Sugeno output function; input and Mamdani output "

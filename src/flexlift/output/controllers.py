@@ -7,6 +7,8 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+from flexlift.errors import clean
+from flexlift.plumbing import reading
 from flexlift.plumbing.atomic import write_bytes
 
 #: the output folder's subfolder for the copies
@@ -21,7 +23,7 @@ def copy_controller_files(scenario, folder: Path) -> tuple[object, list[dict]]:
         return scenario, []
     records, moved = [], {}
     for key, src in files.items():
-        data = Path(src).read_bytes()
+        data = reading.read_bytes(src, f"{key} {clean(str(src), 120)}", reading.FIS)
         role = key.split(".")[1]
         name = f"{role}_{Path(src).name}"
         write_bytes(folder / FOLDER / name, data)

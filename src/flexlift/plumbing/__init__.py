@@ -3,4 +3,7 @@ output lock. The bottom floor of the package (like :mod:`flexlift._jit` for comp
 imports nothing of flexlift but :mod:`flexlift.errors`, and every layer may import it.
 
 - :mod:`flexlift.plumbing.atomic`: a reader never sees a half-written file.
+- :mod:`flexlift.plumbing.reading`: every file flexlift reads (scenario, sweep SPEC, base
+  scenario, controller ``.fis``) is a regular UTF-8 file of at most 1 MB, read without
+  blocking; anything else is one line naming the file.
 """

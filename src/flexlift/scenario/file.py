@@ -14,20 +14,19 @@ text), so that a schema with strict numbers accepts what engineers write.
 
 from __future__ import annotations
 
-import codecs
-import errno
-import os
 import re
-import stat
 from pathlib import Path
 
 import yaml
 from yaml.nodes import MappingNode, ScalarNode, SequenceNode
 
 from flexlift.errors import InputError, clean
+from flexlift.plumbing import reading
+from flexlift.plumbing.reading import SCENARIO
 
-#: largest scenario file [bytes]: a 20,000-element hull with per-element properties is ~0.5 MB
-MAX_BYTES = 1_000_000
+#: largest scenario file [bytes] (every file flexlift reads has this limit): a 20,000-element
+#: hull with per-element properties is ~0.5 MB
+MAX_BYTES = reading.MAX_BYTES
 #: deepest nesting of lists and mappings (a scenario needs 5: lift.bags[i].span_m)
 MAX_DEPTH = 32
 #: most values (scalars, lists, mappings) after expanding aliases: as many as a file at the
@@ -73,74 +72,17 @@ def _fail(source: str, what: str) -> InputError:
     return InputError.from_line(f"{source}: {what}")
 
 
-def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
-        if test(mode):
-            return name
-    return "a special file"
-
-
 def read_bytes(path: Path, source: str, builtins: str) -> bytes:
-    """The bytes of the regular file ``path`` (at most :data:`MAX_BYTES`); ``source`` names
-    it in messages, ``builtins`` lists the built-in names for the "no such file" one."""
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
-    try:
-        fd = os.open(path, flags)  # non-blocking: opening a FIFO must not wait for a writer
-    except (FileNotFoundError, NotADirectoryError):
-        raise _fail(source, f"no such file; give a YAML path or a built-in name ({builtins})") from None
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            raise _fail(source, "a symbolic link that loops (it never reaches a file); "
-                        "give the path of the YAML file itself") from None
-        if exc.errno == errno.EACCES:
-            raise _fail(source, "permission denied; the scenario file must be readable") from None
-        raise _fail(source, f"cannot be opened ({exc.strerror or exc}); give a YAML file") from None
-    except ValueError:  # a NUL character in the path
-        raise _fail(source, "not a valid path") from None
-    try:
-        mode = os.fstat(fd).st_mode
-        if stat.S_ISDIR(mode):
-            raise _fail(source, "a folder, not a scenario file; give the path of a YAML file")
-        if not stat.S_ISREG(mode):
-            raise _fail(source, f"{_kind(mode)}, not a regular file; a scenario is read only from "
-                        "a regular YAML file")
-        with os.fdopen(os.dup(fd), "rb") as f:
-            data = f.read(MAX_BYTES + 1)  # not trusting st_size: the file may grow meanwhile
-    except OSError as exc:
-        raise _fail(source, f"cannot be read ({exc.strerror or exc})") from None
-    finally:
-        os.close(fd)
-    if len(data) > MAX_BYTES:
-        raise _fail(source, f"larger than {MAX_BYTES:,} bytes (1 MB), the limit for a scenario "
-                    "file; a scenario is a few kB of YAML")
-    return data
+    """The bytes of the regular scenario file ``path`` (at most :data:`MAX_BYTES`, read by
+    :func:`flexlift.plumbing.reading.read_bytes`); ``source`` names it in messages,
+    ``builtins`` lists the built-in names for the "no such file" one."""
+    kind = SCENARIO.with_missing(f"give a YAML path or a built-in name ({builtins})")
+    return reading.read_bytes(path, source, kind)
 
 
 def decode(data: bytes, source: str) -> str:
-    """The text of a UTF-8 file (a UTF-8 byte-order mark is allowed and dropped)."""
-    for bom, name in ((codecs.BOM_UTF32_LE, "UTF-32"), (codecs.BOM_UTF32_BE, "UTF-32"),
-                      (codecs.BOM_UTF16_LE, "UTF-16"), (codecs.BOM_UTF16_BE, "UTF-16")):
-        if data.startswith(bom):
-            raise _fail(source, f"{name} text (it starts with a {name} byte-order mark); save "
-                        "the scenario as UTF-8")
-    nul = data.find(b"\x00")
-    if nul >= 0:
-        line, col = _line_col_bytes(data, nul)
-        raise _fail(source, f"a binary file, not YAML text (a NUL byte at line {line}, column "
-                    f"{col}); give a UTF-8 YAML file")
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line, col = _line_col_bytes(data, exc.start)
-        raise _fail(source, f"not UTF-8 text: byte 0x{data[exc.start]:02x} at line {line}, "
-                    f"column {col} is not UTF-8 (Latin-1 or Windows-1252 text?); save the "
-                    "scenario as UTF-8") from None
-
-
-def _line_col_bytes(data: bytes, pos: int) -> tuple[int, int]:
-    start = data.rfind(b"\n", 0, pos) + 1
-    return data.count(b"\n", 0, pos) + 1, len(data[start:pos].decode("utf-8", "ignore")) + 1
+    """The text of a UTF-8 scenario file (a UTF-8 byte-order mark is allowed and dropped)."""
+    return reading.decode(data, source, SCENARIO)
 
 
 # --------------------------------------------------------------------------- the YAML

@@ -38,6 +38,7 @@ from pydantic import (
 
 from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
+from flexlift.plumbing import reading
 from flexlift.scenario import cost
 from flexlift.scenario.defaults import (
     complete_own_structure,
@@ -648,16 +649,19 @@ EMPTY = ("the file is empty (or only comments); an empty scenario is not read as
 
 
 def file_sha256(path) -> str:
-    """SHA-256 of a file's bytes (hex), or of its path when it cannot be read."""
+    """SHA-256 of a .fis file's bytes (hex), or of its path when it cannot be read (no such
+    file, not a regular file, larger than 1 MB: reading it for use then says so). Read within
+    bounds (:mod:`flexlift.plumbing.reading`): never more than 1 MB + 1 bytes."""
     try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-    except OSError:
+        return hashlib.sha256(reading.read_bytes(path, str(path), reading.FIS)).hexdigest()
+    except InputError:
         return hashlib.sha256(str(path).encode()).hexdigest()
 
 
 def _resolve_files(scenario: Scenario, folder: Path) -> Scenario:
-    """``scenario`` with relative .fis paths made relative to ``folder`` (the scenario file's)."""
-    moved = {k: str((folder / p).resolve()) for k, p in scenario.controller_files().items()
+    """``scenario`` with relative .fis paths made relative to ``folder`` (the scenario file's);
+    a symbolic link that loops stays as written, refused with one line when read."""
+    moved = {k: reading.absolute(folder / p) for k, p in scenario.controller_files().items()
              if not Path(p).is_absolute()}
     return scenario.with_changes(**moved) if moved else scenario
 
@@ -702,7 +706,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         name_or_path = "tanker"
     source = clean(str(name_or_path), 120)
     path = Path(name_or_path)
-    if isinstance(name_or_path, str) and name_or_path in builtin_names() and not path.exists():
+    if isinstance(name_or_path, str) and name_or_path in builtin_names() and not reading.exists(path):
         text = (resources.files("flexlift") / "scenarios" / f"{name_or_path}.yaml").read_text()
     else:
         data = read_bytes(path, source, ", ".join(builtin_names()))
@@ -714,4 +718,4 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         raise InputError(source, type(data).__name__, "a scenario file must hold a YAML mapping "
                          "of keys (name: ..., hull: ..., ...)")
     scenario = parse_scenario(data, source=source)
-    return _resolve_files(scenario, path.parent) if path.exists() else scenario
+    return _resolve_files(scenario, path.parent) if reading.exists(path) else scenario

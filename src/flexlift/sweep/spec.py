@@ -25,7 +25,9 @@ varies fastest); a list may be written ``{low: 200, high: 800, num: 4}`` (evenly
       control.breakout_pull_t: {low: 100, high: 200, num: 3}
 
 Every key is checked against the scenario's schema, every grid value and every distribution's
-ends against the base scenario, before anything runs: bad input is one line
+ends against the base scenario, and every controller .fis file the SPEC names (under set:, in
+a grid, as a choice, or the base's own) is read and checked for its controller, before
+anything runs: bad input is one line
 (:class:`~flexlift.errors.InputError`). :func:`load_spec` reads a file; :func:`parse_spec`
 takes the mapping.
 """
@@ -42,8 +44,10 @@ from pathlib import Path
 
 from flexlift import __version__
 from flexlift.errors import InputError, brief, clean
+from flexlift.fuzzy.fis import load_controller_fis
+from flexlift.plumbing import reading
 from flexlift.scenario import ControlMode, Scenario, builtin_names, load_scenario
-from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
+from flexlift.scenario.file import dump_yaml, load_yaml
 from flexlift.sweep.distributions import Distribution, parse_distribution
 from flexlift.sweep.keys import check_key
 
@@ -163,8 +167,7 @@ def load_spec(path: str | os.PathLike, yes: bool = False) -> SweepSpec:
     (200, 'lhs', ('hydro.drag_coefficient',))
     """
     source = clean(os.fspath(path), 120)
-    data = load_yaml(decode(read_bytes(Path(path), source, "a SPEC is a YAML file"), source),
-                     source)
+    data = load_yaml(reading.read_text(path, source, reading.SPEC), source)
     return parse_spec(data, source, Path(path).parent, yes)
 
 
@@ -183,6 +186,8 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
         check_key(k, f"{source}: set")
     if fixed:
         base = _changed(base, fixed, f"{source}: set")
+    checked: set = set()  # (role, path) of the .fis files read so far
+    _check_files(base, f"{source}: set" if fixed else f"{source}: base", checked)
     controls = _controls(data.get("control", base.control.mode), source)
     keep = data.get("keep", "summary")
     if keep not in ("summary", "histories"):
@@ -205,12 +210,13 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
         _check_size(spec, yes)
         for key, values in grid.items():  # each value against the base, before anything runs
             for v in values:
-                _changed(base, {key: v}, f"{source}: grid.{key} = {brief(v, 40)}")
+                where = f"{source}: grid.{key} = {brief(v, 40)}"
+                _check_files(_changed(base, {key: v}, where), where, checked)
     else:
         mc = _mapping(data["monte_carlo"], f"{source}: monte_carlo")
         _only(mc, MC_KEYS, f"{source}: monte_carlo")
         samples, seed, method, dists = _monte_carlo(mc, base, fixed, f"{source}: monte_carlo",
-                                                    folder)
+                                                    folder, checked)
         spec = SweepSpec(method=method, grid={}, distributions=dists, samples=samples, seed=seed,
                          **common)
         _check_size(spec, yes)
@@ -239,16 +245,17 @@ def _base(ref, source: str, folder: Path | None) -> Scenario:
         raise InputError(f"{source}: base", brief(ref, 40), "a built-in name "
                          f"({', '.join(builtin_names())}) or a path to a scenario YAML file")
     near = (folder / ref) if folder is not None and not Path(ref).is_absolute() else Path(ref)
-    if near.exists():
-        return load_scenario(near)
-    return load_scenario(ref)
+    try:
+        return load_scenario(near if reading.exists(near) else ref)
+    except InputError as exc:
+        raise InputError.from_line(f"{source}: base: {exc}") from None
 
 
 def _path(key: str, value, folder: Path | None):
     """A file a key names (``control.supervisor.fis_file``), relative to the SPEC's folder."""
     if (key.endswith("fis_file") and isinstance(value, str) and folder is not None
             and not Path(value).is_absolute()):
-        return str((folder / value).resolve())
+        return reading.absolute(folder / value)
     return value
 
 
@@ -257,6 +264,22 @@ def _changed(base: Scenario, changes: dict, where: str) -> Scenario:
         return base.with_changes(**changes)
     except InputError as exc:
         raise InputError.from_line(f"{where}: {exc}") from None
+
+
+def _check_files(scenario: Scenario, where: str, checked: set) -> None:
+    """Read and check every .fis file ``scenario`` names (``controller_files``) for its
+    controller, before any case runs: a missing or unfit file is one line naming the key and
+    the value that name it. ``checked`` holds the (role, path) pairs already read."""
+    for key, path in scenario.controller_files().items():
+        role = key.split(".")[1]
+        if (role, path) in checked:
+            continue
+        resolution = scenario.control.supervisor.resolution if role == "supervisor" else 101
+        try:
+            load_controller_fis(path, role, resolution=resolution)
+        except InputError as exc:
+            raise InputError.from_line(f"{where}: {key}: {exc}") from None
+        checked.add((role, path))
 
 
 def _controls(value, source: str) -> tuple[str, ...]:
@@ -318,7 +341,8 @@ def _spaced(d: dict, where: str, whole: bool) -> list:
     return [int(v) for v in np.rint(vals)] if whole else [float(v) for v in vals]
 
 
-def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path | None = None):
+def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path | None = None,
+                 checked: set | None = None):
     samples = mc.get("samples")
     if isinstance(samples, bool) or not isinstance(samples, int) or samples <= 0:
         raise InputError(f"{where}.samples", brief(samples, 40), "a whole number >= 1")
@@ -342,7 +366,8 @@ def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path
         dist = parse_distribution(k, d, f"{where}.vary")
         ends = dist.values if dist.kind == "choice" else dist.ppf([0.0, 1.0 - 1e-16])
         for v in ends:
-            _changed(base, {key: v}, f"{where}.vary.{key} = {brief(v, 40)}")
+            at = f"{where}.vary.{key} = {brief(v, 40)}"
+            _check_files(_changed(base, {key: v}, at), at, set() if checked is None else checked)
         dists[key] = dist
     return samples, seed, method, dists
 
