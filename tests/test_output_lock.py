@@ -246,3 +246,23 @@ def test_figure_processes_started_before_the_folder_journal_their_files(tmp_path
     with output_folder(out, "modes") as tmp:  # ours: replaced
         write_text(tmp / "b.txt", "b")
     assert sorted(os.listdir(out)) == [MARKER, "b.txt"]
+
+
+def test_a_fifo_planted_as_a_case_record_never_blocks_a_resume(tmp_path):
+    """The sweep reads its own case records without blocking: a FIFO is not a record."""
+    import signal
+
+    from flexlift.sweep.store import _read_json
+
+    fifo = tmp_path / "case_0001.json"
+    os.mkfifo(fifo)
+    signal.signal(signal.SIGALRM, lambda *a: (_ for _ in ()).throw(TimeoutError("blocked")))
+    signal.alarm(10)
+    try:
+        assert _read_json(fifo) is None
+    finally:
+        signal.alarm(0)
+    (tmp_path / "real.json").write_text('{"case": 1}')
+    assert _read_json(tmp_path / "real.json") == {"case": 1}
+    (tmp_path / "link.json").symlink_to(tmp_path / "real.json")
+    assert _read_json(tmp_path / "link.json") is None

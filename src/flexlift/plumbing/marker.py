@@ -40,7 +40,7 @@ JOURNAL_MAX = 32_000_000
 _NOFOLLOW = os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
 
 
-def _read_regular(path: Path, limit: int) -> bytes | None:
+def read_regular(path: Path, limit: int) -> bytes | None:
     """The bytes of a regular file (not through a link, at most ``limit``), else None."""
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | _NOFOLLOW)
@@ -65,7 +65,7 @@ def _read_regular(path: Path, limit: int) -> bytes | None:
 
 def read_marker(folder: Path) -> dict | None:
     """The marker of ``folder`` as a dict, or None when it has none (or not a readable one)."""
-    data = _read_regular(Path(folder) / MARKER, MARKER_MAX)
+    data = read_regular(Path(folder) / MARKER, MARKER_MAX)
     if data is None:
         return None
     try:
@@ -113,7 +113,7 @@ class Journal:
 
     def entries(self) -> list[str]:
         """The names claimed so far (a torn last line is dropped)."""
-        data = _read_regular(self.path, JOURNAL_MAX)
+        data = read_regular(self.path, JOURNAL_MAX)
         out = []
         for line in (data or b"").splitlines():
             try:

@@ -33,6 +33,7 @@ from pathlib import Path
 
 from flexlift.output.folders import incremental_folder
 from flexlift.plumbing.atomic import write_json
+from flexlift.plumbing.marker import read_regular
 
 COMMAND = "sweep"
 #: a case's record, and its histories (one netCDF per control mode)
@@ -43,11 +44,12 @@ OWNER_ATTR = "flexlift_sweep_checksum"
 
 
 def _read_json(path: Path):
+    """A case record of this folder, or None: read only from a regular file (no link, FIFO or
+    device: a planted one never blocks a resume), at most 10 MB."""
+    data = read_regular(path, 10_000_000)
     try:
-        if path.stat().st_size > 10_000_000:
-            return None
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        return None if data is None else json.loads(data.decode("utf-8"))
+    except ValueError:  # UnicodeDecodeError is one
         return None
 
 
