@@ -209,4 +209,4 @@ def test_report_puts_the_papers_table_in_the_appendix(tanker):
     assert "<td>0.8361</td>" in html[paper:] and "<td>-44.3</td>" in html[paper:]
     assert "<td>0.02143</td>" in html[paper:]
     trawler = load_scenario(Path(__file__).parent / "data" / "trawler.yaml")
-    assert 'id="appendix"' not in render_report(trawler, [run_stage(trawler)])
+    assert "still-water case" not in render_report(trawler, [run_stage(trawler)])  # no paper table

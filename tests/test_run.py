@@ -7,24 +7,41 @@ import pytest
 
 from flexlift.cli import main
 
-EXPECTED_SECTIONS = ["particulars", "criteria", "modes", "loads", "reduce", "fuzzy", "simulate"]
+#: the report's sections in the order of a method statement: the decision, the design basis,
+#: the plan and its strength, the ascent; the research material in the appendix
+EXPECTED_SECTIONS = ["decision", "design-basis", "criteria", "loads", "simulate", "appendix"]
+#: the research appendix, a page of its own beside the report (appendix.html)
+APPENDIX_SECTIONS = ["modes", "reduce", "fuzzy"]
 
 
 class _Collect(HTMLParser):
     def __init__(self):
         super().__init__()
         self.ids, self.imgs, self.tags = set(), 0, []
+        self.order, self.headings, self._heading = [], [], None
 
     def handle_starttag(self, tag, attrs):
         a = dict(attrs)
         self.tags.append(tag)
         if "id" in a:
             self.ids.add(a["id"])
+            self.order.append(a["id"])
+        if tag in ("h1", "h2", "h3", "h4"):
+            self._heading = ""
         if tag == "img":
             assert a["src"].startswith("data:image/png;base64,"), "figures must be embedded"
             self.imgs += 1
         if tag in ("script", "link"):
             raise AssertionError("the report must be self-contained (no scripts or links)")
+
+    def handle_data(self, data):
+        if self._heading is not None:
+            self._heading += data
+
+    def handle_endtag(self, tag):
+        if tag in ("h1", "h2", "h3", "h4") and self._heading is not None:
+            self.headings.append(self._heading.strip())
+            self._heading = None
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +54,7 @@ def tanker_run(tmp_path_factory):
 
 def test_run_writes_every_file(tanker_run):
     out = tanker_run
-    for name in ("report.html", "summary.json", "results.nc", "scenario.yaml"):
+    for name in ("report.html", "appendix.html", "summary.json", "results.nc", "scenario.yaml"):
         assert (out / name).is_file(), name
     assert list((out / "figures").glob("*.png")), "figures/*.png"
     assert list((out / "tables").glob("*.csv")), "tables/*.csv"
@@ -50,7 +67,20 @@ def test_report_parses_and_has_every_section(tanker_run):
     p.feed(text)
     for section in EXPECTED_SECTIONS:
         assert section in p.ids, section
-    assert p.imgs >= 10
+    where = [p.order.index(s) for s in EXPECTED_SECTIONS]
+    assert where == sorted(where), "the sections are out of a method statement's order"
+    doubled = sorted({h for h in p.headings if p.headings.count(h) > 1})
+    assert not doubled, doubled
+    assert "SPEC" not in text and "DESIGN.md" not in text  # no document outside the project
+    assert "The ascent against its limits" in text
+    assert 'href="appendix.html"' in text
+    appendix = (tanker_run / "appendix.html").read_text()
+    q = _Collect()
+    q.feed(appendix)
+    where = [q.order.index(s) for s in APPENDIX_SECTIONS]
+    assert where == sorted(where) and q.imgs >= 5
+    assert not (set(APPENDIX_SECTIONS) & p.ids)  # not repeated in the client's report
+    assert p.imgs >= 8  # the plan, the strength and the ascent figures (the rest: appendix.html)
     assert "PASS" in text or "FAIL" in text
     assert "checksum" in text
 
@@ -132,11 +162,12 @@ def test_long_tables_are_linked_csv_files_not_on_the_page(tanker_run):
     import csv
     import re
 
-    text = (tanker_run / "report.html").read_text()
+    text = (tanker_run / "appendix.html").read_text()  # the research tables' page
     links = re.findall(r'<a href="([^"#][^"]*)"', text)
     assert {"tables/reduce_gains.csv", "tables/fuzzy_sets.csv",
             "tables/modes_frequencies.csv"} <= set(links)
-    for href in links:  # every link of the report points into its own output folder
+    report_links = re.findall(r'<a href="([^"#][^"]*)"', (tanker_run / "report.html").read_text())
+    for href in links + report_links:  # every link points into its own output folder
         assert (tanker_run / href).is_file(), href
     headers = re.findall(r"<thead>(.*?)</thead>", text)
     assert not any("bag_1 [m/N]" in h or ">parameters<" in h for h in headers)
@@ -169,7 +200,8 @@ def test_print_css_keeps_headings_with_what_follows(tanker_run):
 def test_one_mode_numbering_and_one_time_unit(tanker_run):
     import re
 
-    text = _visible_text((tanker_run / "report.html").read_text())
+    text = " ".join(_visible_text((tanker_run / page).read_text())
+                    for page in ("report.html", "appendix.html"))
     numbered = re.findall(r"(\w+ )mode (\d+)", text)
     assert numbered and all(word == "flexible " for word, _ in numbered), numbered
     assert "flexible mode 3" in text and "(lift.layout_flexible_mode)" in text

@@ -15,7 +15,7 @@ from flexlift._jit import cache_is_warm
 from flexlift.cli._common import add_scenario_arg, emit_json, help_text, scenario_from
 from flexlift.output import output_folder, write_json, write_text
 from flexlift.output.controllers import copy_controller_files
-from flexlift.output.report import render_report
+from flexlift.output.report import APPENDIX_PAGE, BODY_STAGES, render_appendix, render_report
 from flexlift.stages.run import (
     CONTROL_MODES,
     DEFAULT_CONTROLS,
@@ -133,7 +133,10 @@ def _main(args: argparse.Namespace) -> int:
             summary["controller_files"] = copies
         write_text(tmp / "scenario.yaml", as_written.to_yaml())
         write_json(tmp / "summary.json", summary)
-        write_text(tmp / "report.html", render_report(scenario, outputs))
+        write_text(tmp / "report.html", render_report(scenario, outputs,
+                                                       appendix_page=APPENDIX_PAGE))
+        if any(o.name.split(":")[0] not in BODY_STAGES for o in outputs):
+            write_text(tmp / APPENDIX_PAGE, render_appendix(scenario, outputs))
     if args.json:
         emit_json(summary)
     if not args.quiet:

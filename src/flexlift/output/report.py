@@ -14,7 +14,7 @@ from pathlib import Path
 
 from flexlift import __version__
 from flexlift.output.checktext import explain_check
-from flexlift.output.stage import StageOutput
+from flexlift.output.stage import StageOutput, Table
 
 STAGE_TITLES = {
     "modes": "1. Modal analysis of the hull",
@@ -233,8 +233,43 @@ def _verdict(lift: dict, checks: dict, warnings: list, reasons: dict | None = No
     return f'<div class="verdict {cls}"><b>{_e(head)}:</b> {_e(lead)}.{causes}</div>'
 
 
-def _stage_sections(stages: list[StageOutput]) -> list[str]:
-    """One section per stage (control modes as sub-sections): lead, tables, figures."""
+#: the stages a client reads in the body (the plan and its strength, the ascent); the modal
+#: analysis, the reduction and the fuzzy controller are the research appendix
+BODY_STAGES = ("loads", "simulate", "compare")
+
+
+def _limits_table(scenario, stages: list[StageOutput]) -> Table | None:
+    """The ascent against its limits: each simulated value beside its limit and the share of
+    the limit it used, in every control mode (None when nothing was simulated)."""
+    runs = [(s.name.split(":", 1)[1], s.summary) for s in stages if s.name.startswith("simulate:")]
+    if not runs:
+        return None
+    lim = scenario.limits
+    rows_spec = [
+        ("largest upward speed", "m/s", lim.ascent_velocity_m_s, "max_ascent_velocity_ms"),
+        ("largest downward speed once separated", "m/s", lim.descent_velocity_m_s,
+         "max_descent_velocity_ms"),
+        ("largest pitch", "deg", lim.pitch_deg, "max_pitch_deg"),
+        ("hull girder bending utilisation", "-", 1.0, "max_utilisation"),
+        ("largest slope (the beam model's validity)", "deg", lim.slope_validity_deg,
+         "max_slope_deg"),
+    ]
+    rows = []
+    for label, unit, limit, key in rows_spec:
+        values = [summary.get(key) for _, summary in runs]
+        known = [abs(v) for v in values if isinstance(v, int | float)]
+        used = f"{100 * max(known) / limit:.0f} %" if known and limit else None
+        rows.append([f"{label} [{unit}]", limit, *values, used])
+    rows.append(["outcome", "safe", *[summary.get("outcome") for _, summary in runs], None])
+    return Table("The ascent against its limits",
+                 ["criterion", "limit", *[f"{m} control" for m, _ in runs], "most of the limit used"],
+                 rows, note="Each value is the run's own (flexlift simulate); the limits are the "
+                 "scenario's (section limits).")
+
+
+def _stage_sections(stages: list[StageOutput], level: int = 2) -> list[str]:
+    """One section per stage (control modes as sub-sections): lead, tables, figures;
+    ``level``: the stage headings' level (3 inside the appendix)."""
     parts: list[str] = []
     seen: set[str] = set()
     for s in stages:
@@ -242,11 +277,12 @@ def _stage_sections(stages: list[StageOutput]) -> list[str]:
         base = "simulate" if base == "compare" else base
         if base not in seen:
             seen.add(base)
-            parts.append(f'<h2 id="{_e(base)}">{_e(STAGE_TITLES.get(base, base))}</h2>')
+            parts.append(f'<h{level} id="{_e(base)}">{_e(STAGE_TITLES.get(base, base))}'
+                         f"</h{level}>")
         if variant:
-            parts.append(f'<h3 id="{_e(s.name)}">{_e(variant)} control</h3>')
-        elif s.name == "compare":
-            parts.append('<h3 id="compare">Control modes compared</h3>')
+            parts.append(f'<h{level + 1} id="{_e(s.name)}">{_e(variant)} control</h{level + 1}>')
+        elif s.name == "compare":  # its table carries the title "Control modes compared"
+            parts.append('<span id="compare"></span>')
         lead = s.summary.get("conclusion") if isinstance(s.summary, dict) else None
         if lead:
             parts.append(f"<p>{_e(lead)}</p>")
@@ -265,14 +301,54 @@ def _appendix(t) -> bool:
 
 
 def _appendix_section(stages: list[StageOutput]) -> list[str]:
-    tables = [t for s in stages for t in s.tables if _appendix(t)]
-    if not tables:
-        return []
-    return ['<h2 id="appendix">Appendix</h2>'] + [_table(t) for t in tables]
+    """The tables that belong to the appendix (the paper's own), after its stages."""
+    return [_table(t) for s in stages for t in s.tables if _appendix(t)]
 
 
-def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None) -> str:
-    """The whole report as one HTML page (figures embedded as base64 PNG)."""
+def _assumed(scenario) -> str:
+    """The values nobody gave (scenario/defaults.py): each with its rule or assumption."""
+    from flexlift.scenario.defaults import assumed_summary
+
+    lines = assumed_summary(scenario)
+    if not lines:
+        return ('<p class="meta">Every value of the structure and the site was given in the '
+                "scenario (or is the built-in reference case's); none was assumed.</p>")
+    items = "".join(f"<li>{_e(line)}</li>" for line in lines)
+    return (f'<div class="keep"><h3 id="assumed">Values assumed or derived, not given</h3>'
+            f"<ul>{items}</ul></div>")
+
+
+#: the separate page of the research appendix beside report.html (flexlift run writes both)
+APPENDIX_PAGE = "appendix.html"
+
+
+def render_appendix(scenario, stages: list[StageOutput],
+                    generated: datetime | None = None) -> str:
+    """The research appendix as its own page: the modal analysis, the model reduction and the
+    fuzzy controller the ascent is built on (what a researcher opens; the client's report
+    links it)."""
+    generated = generated or datetime.now(UTC)
+    research = [s for s in stages if s.name.split(":")[0] not in BODY_STAGES]
+    parts = [
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+        f"<title>flexlift appendix: {_e(scenario.name)}</title><style>{_CSS}</style></head>"
+        "<body>",
+        f"<h1>flexlift report — {_e(scenario.name)}: the analysis behind the numbers</h1>",
+        f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
+        f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC · "
+        'the decision and the plan are in <a href="report.html">report.html</a></p>',
+    ]
+    parts += _stage_sections(research)
+    parts.append("</body></html>")
+    return "\n".join(p for p in parts if p)
+
+
+def render_report(scenario, stages: list[StageOutput], generated: datetime | None = None,
+                  appendix_page: str | None = None) -> str:
+    """The whole report as one HTML page (figures embedded as base64 PNG). With
+    ``appendix_page`` (a file name beside it, written from :func:`render_appendix`) the
+    modal, reduction and fuzzy stages are left to that page and linked; without, they are the
+    report's appendix."""
     generated = generated or datetime.now(UTC)
     # lift criteria (docs/theory/factors.md#criteria) decide the verdict; the other stages' checks are numerical
     # self-checks of the analysis, shown apart but counted too
@@ -288,11 +364,19 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
     check_reasons = {f"{s.name}: {k}": explain_check(s.name, k, s.summary) for s in stages
                      if not s.name.startswith("simulate:") for k, v in s.criteria.items() if not v}
     warnings = [(s.name, w) for s in stages for w in s.warnings]
-    headline = next((s.tables[0] for s in stages if s.name == "compare" and s.tables), None)
+    headline = _limits_table(scenario, stages)
     if headline is None:
         headline = next((s.tables[0] for s in stages if s.name == "loads" and s.tables), None)
-    bases = dict.fromkeys("simulate" if s.name == "compare" else s.name.split(":")[0] for s in stages)
+    body = [s for s in stages if s.name.split(":")[0] in BODY_STAGES]
+    research = [s for s in stages if s.name.split(":")[0] not in BODY_STAGES]
+    apart = bool(appendix_page and research)
+    bases = dict.fromkeys("simulate" if s.name == "compare" else s.name.split(":")[0] for s in body)
     nav = "".join(f'<li><a href="#{b}">{_e(STAGE_TITLES.get(b, b))}</a></li>' for b in bases)
+    nav += '<li><a href="#design-basis">Design basis</a></li>'
+    if warnings:
+        nav += '<li><a href="#warnings">Warnings</a></li>'
+    if research or checks:
+        nav += '<li><a href="#appendix">Appendix: the analysis behind the numbers</a></li>'
     parts = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>flexlift report: {_e(scenario.name)}</title><style>{_CSS}</style></head><body>",
@@ -300,20 +384,34 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         f"<p>{_e(scenario.description)}</p>" if scenario.description else "",
         f'<p class="meta">flexlift {_e(__version__)} · scenario checksum (SHA-256) '
         f"<code>{_e(scenario.checksum())}</code> · generated {generated:%Y-%m-%d %H:%M} UTC</p>",
+        '<h2 id="decision">Decision</h2>',
         _verdict(lift, checks, warnings, reasons, outcomes, check_reasons),
         _table(headline) if headline is not None else "",
         f"<nav><ul>{nav}</ul></nav>",
-        '<h2 id="particulars">Particulars</h2>',
+        '<h2 id="design-basis">Design basis</h2>',
         _particulars(scenario),
+        _assumed(scenario),
     ]
     if lift:
-        parts += ['<h2 id="criteria">Lift criteria</h2>', _criteria(lift)]
-    if checks:
-        parts += ['<h2 id="checks">Numerical checks of the analysis</h2>', _criteria(checks)]
+        parts += ['<h3 id="criteria">Lift criteria</h3>', _criteria(lift)]
+    parts += _stage_sections(body)
     if warnings:
         parts += ['<h2 id="warnings">Warnings</h2>'] + [
             f'<div class="warn"><b>{_e(name)}:</b> {_e(w)}</div>' for name, w in warnings]
-    parts += _stage_sections(stages)
+    if research or checks or any(_appendix(t) for s in stages for t in s.tables):
+        parts.append('<h2 id="appendix">Appendix: the analysis behind the numbers</h2>')
+        parts.append('<p class="meta">For the researcher and the checker: the modal analysis, '
+                     "the model reduction and the fuzzy controller the ascent is built on, the "
+                     "numerical self-checks of the analysis, and the paper's own tables.</p>")
+    if apart:
+        titles = ", ".join(STAGE_TITLES.get(b, b).split(". ", 1)[-1].lower()
+                           for b in dict.fromkeys(s.name.split(":")[0] for s in research))
+        parts.append(f'<p id="research">The {_e(titles)}: in <a href="{_e(appendix_page)}">'
+                     f"<code>{_e(appendix_page)}</code></a>, beside this report.</p>")
+    if checks:
+        parts += ['<h3 id="checks">Numerical checks of the analysis</h3>', _criteria(checks)]
+    if not apart:
+        parts += _stage_sections(research, level=3)
     parts += _appendix_section(stages)
     parts.append("</body></html>")
     return "\n".join(p for p in parts if p)
