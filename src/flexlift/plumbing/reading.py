@@ -20,7 +20,7 @@ import stat
 from dataclasses import dataclass
 from pathlib import Path
 
-from flexlift.errors import InputError
+from flexlift.errors import InputError, clean
 
 #: largest file flexlift reads [bytes] (1 MB): a scenario or a .fis file is a few kB
 MAX_BYTES = 1_000_000
@@ -85,7 +85,9 @@ def read_bytes(path: str | os.PathLike, source: str, kind: FileKind = SCENARIO,
     try:
         fd = os.open(path, flags)  # non-blocking: opening a FIFO must not wait for a writer
     except (FileNotFoundError, NotADirectoryError):
-        raise _fail(source, f"no such file; {kind.missing}") from None
+        where = clean(os.path.abspath(os.fspath(path)), 160)
+        looked = "" if where == source else f" (looked for {where})"
+        raise _fail(source, f"no such file{looked}; {kind.missing}") from None
     except OSError as exc:
         if exc.errno == errno.ELOOP:
             raise _fail(source, "a symbolic link that loops (it never reaches a file); "
