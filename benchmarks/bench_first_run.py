@@ -49,7 +49,7 @@ def main() -> int:
     rc, lines = timed_lines([str(clone / "dev"), "run", "--out", "first"], user)
     gaps = [b[0] - a[0] for a, b in zip(lines, lines[1:])]
     at = {key: next((t for t, s in lines if re.search(pat, s)), None) for key, pat in (
-        ("ready", r"environment ready"), ("compiled", r"compiled and cached|ascent loop"),
+        ("ready", r"environment ready"), ("compiled", r"compiled and cached"),
         ("stage_1", r"^\[1/"), ("done", r"^done in"))}
     first_run = float(re.search(r"done in ([0-9.]+) s", next(
         (s for _, s in lines if s.startswith("done in")), "done in nan s")).group(1))

@@ -19,7 +19,7 @@ import threading
 import time
 
 #: seconds before the first "compiling" line, and between the lines after it
-FIRST_NOTICE_S, EVERY_S = 2.0, 10.0
+FIRST_NOTICE_S, EVERY_S = 2.0, 8.0
 
 
 def _notices(done: threading.Event, t0: float, say) -> None:
