@@ -251,3 +251,9 @@ def test_the_heap_is_frozen_and_figures_drawn_beside_during_flexlift_run(monkeyp
         assert gc.get_freeze_count() == frozen  # not released by the inner block
     finally:
         gc.unfreeze()
+
+
+def test_summary_leads_with_the_decision(tanker_run):
+    summary = json.loads((tanker_run / "summary.json").read_text())
+    assert summary["outcome"] == "safe"
+    assert summary["outcomes"] == {"decentralized": "safe", "coordinated": "safe"}

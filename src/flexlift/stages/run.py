@@ -96,6 +96,10 @@ def _run_stages(scenario, out: Path, stages, controls, progress) -> list[StageOu
     return outputs
 
 
+#: the outcomes of an ascent from the worst (ascent/outcome.py)
+OUTCOME_ORDER = ("unsafe", "not_achieved", "incomplete", "safe")
+
+
 def summary_of(scenario, outputs: list[StageOutput], elapsed_s: float) -> dict:
     """summary.json: the headline numbers of every stage under the stage's name."""
     stages: dict = {}
@@ -105,11 +109,15 @@ def summary_of(scenario, outputs: list[StageOutput], elapsed_s: float) -> dict:
         elif o.name != "compare":
             stages[o.name] = o.summary
     criteria = {f"{o.name}.{k}": bool(v) for o in outputs for k, v in o.criteria.items()}
+    outcomes = {m: s.get("outcome") for m, s in stages.get("simulate", {}).items()}
     return {
         "flexlift_version": __version__,
         "scenario": scenario.name,
         "scenario_checksum": scenario.checksum(),
         "elapsed_s": round(elapsed_s, 2),
+        # the decision: the worst outcome of the control modes simulated (None: none simulated)
+        "outcome": next((k for k in OUTCOME_ORDER if k in outcomes.values()), None),
+        "outcomes": outcomes,
         "all_criteria_passed": all(criteria.values()) if criteria else None,
         "criteria": criteria,
         "warnings": [w for o in outputs for w in o.warnings],
