@@ -169,3 +169,11 @@ def test_the_scenario_reference_lists_every_rule():
         row = re.search(rf"^\| `{re.escape(key.replace('|', '` or `'))}` \| [^|]* \| {policy} \|",
                         text, flags=re.M)
         assert row, key
+
+
+@pytest.mark.parametrize("defaulted", [[0.0], [[0.0, None]], {1: "assumed"}, "all", 3])
+def test_a_hostile_defaulted_is_one_line_not_a_crash(defaulted):
+    """Found by hypothesis: `defaulted` that is not a mapping of keys reached dict()."""
+    with pytest.raises(InputError) as e:
+        parse_scenario({**TRAWLER, "defaulted": defaulted})
+    assert "defaulted" in str(e.value) and "\n" not in str(e.value)

@@ -136,11 +136,14 @@ def complete_own_structure(data: dict) -> dict:
     with the derived keys of :data:`POLICY` filled in and every key it derived or assumed
     recorded in ``data["defaulted"]`` (key -> "derived" or "assumed"). Required keys are
     checked after validation (:func:`missing_required`), so a bad value is reported first."""
+    given = data.get("defaulted")
+    given = {} if given is None else given
+    if (not isinstance(given, dict) or not all(isinstance(k, str) for k in given)
+            or not isinstance(data.get("hull", {}), dict)):
+        return data  # not a mapping of keys (or no hull section): the schema reports it
     out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
-    defaulted = dict(out.get("defaulted") or {})
+    defaulted = dict(given)
     hull = out.setdefault("hull", {})
-    if not isinstance(hull, dict) or not isinstance(defaulted, dict):
-        return data  # the schema reports it
     ei, z, depth = (hull.get("bending_stiffness_Nm2"), hull.get("section_modulus_m3"),
                     hull.get("depth_m"))
     if "bending_stiffness_Nm2" not in hull and _number(z) and _number(depth):
