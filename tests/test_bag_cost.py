@@ -59,3 +59,40 @@ def test_recorded_row_matches_dense_correction(many_bags):
     assert np.abs(z - P.bags.corr_weight).max() > 1e-6  # the loads' part is there to check
     np.testing.assert_allclose(row[0], z, rtol=0, atol=1e-12 * np.abs(z).max())
     np.testing.assert_allclose(row[2], slope, rtol=0, atol=1e-12 * np.abs(slope).max())
+
+
+def test_one_blas_thread_inside_and_restored_after():
+    import scipy.optimize  # noqa: F401  (its OpenBLAS loaded too)
+
+    from flexlift._threads import _openblas, blas_threads, one_blas_thread
+
+    libs = _openblas()
+    if not libs:
+        pytest.skip("no OpenBLAS loaded in this process")
+    before = blas_threads()
+    try:
+        for _, put in libs:
+            put(2)
+        with one_blas_thread():
+            assert blas_threads() == [1] * len(libs)
+        assert blas_threads() == [2] * len(libs)
+    finally:
+        for (_, put), n in zip(libs, before):
+            put(n)
+
+
+def test_sweep_workers_run_one_blas_thread_and_leave_this_process_alone():
+    import os
+
+    from flexlift._threads import blas_threads
+    from flexlift.sweep.executors import Processes
+
+    env_before = dict(os.environ)
+    pool = Processes(1)
+    try:
+        assert pool.submit(os.getenv, "OPENBLAS_NUM_THREADS").result(timeout=300) == "1"
+        counts = pool.submit(blas_threads).result(timeout=120)
+    finally:
+        pool.close()
+    assert counts and set(counts) == {1}
+    assert dict(os.environ) == env_before
