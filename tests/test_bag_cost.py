@@ -96,3 +96,21 @@ def test_sweep_workers_run_one_blas_thread_and_leave_this_process_alone():
         pool.close()
     assert counts and set(counts) == {1}
     assert dict(os.environ) == env_before
+
+
+def test_benchmark_scenario_gives_the_documented_bag_counts():
+    """benchmarks/bags_tanker.yaml with the catalogue bags of benchmarks/bench_bags.py."""
+    from pathlib import Path
+
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.structure.hull import hull_from_scenario
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bags_tanker.yaml"
+    base = load_scenario(path)
+    hull = hull_from_scenario(base)
+    counts = {}
+    for lift_t in (565.0, 150.0, 50.0, 20.0, 10.0):
+        plan = plan_lift(base.with_changes(**{"lift.catalogue_bag.lift_t": lift_t}), hull)
+        assert all(b.kind == "external" for b in plan.bags)
+        counts[lift_t] = len(plan.bags)
+    assert counts == {565.0: 7, 150.0: 25, 50.0: 73, 20.0: 181, 10.0: 362}
