@@ -28,7 +28,8 @@ ALLOWED = {
     "cli": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
             "ascent", "output", "stages", "sweep"},
 }
-TOP = {"constants", "errors", "_jit", "_struct", "__init__", "__main__"}
+TOP = {"constants", "errors", "_jit", "_struct", "_threads", "_worker_process", "__init__",
+       "__main__"}
 #: the bottom floor every layer may use (flexlift.plumbing: files written and read, the lock)
 BOTTOM = {"plumbing"}
 

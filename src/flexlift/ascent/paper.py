@@ -84,9 +84,9 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
         group=np.arange(ne, dtype=np.int64), capacity=pb.capacity[ext].copy(),
         relief=np.zeros(ne), top_offset=pb.top_offset[ext].copy(), drag=pb.drag[ext].copy(),
         purge_max=pb.purge_max, RT=pb.RT, p_atm=pb.p_atm, rho_g=pb.rho_g,
-        water_depth=pb.water_depth, corr_strip=eye * (D * trib)[:, None], corr_bag=eye * D[:, None],
-        corr_weight=-W * D, slope_strip=np.zeros((ne, ne)), slope_bag=np.zeros((ne, ne)),
-        slope_weight=np.zeros(ne))
+        water_depth=pb.water_depth, corr_shape=eye, corr_weight=-W * D,
+        slope_shape=np.zeros((ne, ne)), slope_weight=np.zeros(ne),
+        gen_strip=eye * (D * trib)[:, None], gen_bag=eye * D[:, None])
     seabed = Seabed(ng=ne, hold_force=-force.copy(), H0=H0, group_weight=W,
                     breakout_time=psb.breakout_time, release_time=psb.release_time,
                     liftoff_clearance=psb.liftoff_clearance)

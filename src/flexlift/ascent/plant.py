@@ -157,15 +157,15 @@ def gas_constants(scenario) -> dict:
                 water_depth=env.water_depth_m)
 
 
-def static_correction(shape_p: np.ndarray, om2_e: np.ndarray, strip_gen: np.ndarray,
-                      bag_gen: np.ndarray, weight_gen: np.ndarray):
-    """The eliminated modes' static (mdc) response at the bag points: per unit strip line
-    load (nb, ns), per unit bag force (nb, nb) and of the weight (nb,), for bag-point shapes
-    ``shape_p`` (nb, ne) of modes with omega^2 ``om2_e`` (ne,), their generalised forces per
-    unit strip load ``strip_gen`` (ne, ns), per unit bag force ``bag_gen`` (ne, nb) and of the
-    weight ``weight_gen`` (ne,)."""
+def static_correction(shape_p: np.ndarray, om2_e: np.ndarray, weight_gen: np.ndarray):
+    """The eliminated modes' static (mdc) response at the bag points, factored: the shapes
+    scaled by the modes' flexibilities, ``shape_p diag(1/omega^2)`` (nb, ne), and the response
+    to the weight (nb,), for bag-point shapes ``shape_p`` (nb, ne) of modes with omega^2
+    ``om2_e`` (ne,) and their generalised force of the weight ``weight_gen`` (ne,). The response
+    to loads with generalised forces f (ne,) is ``scaled @ f``: the loop forms f from the line
+    loads and bag forces and never the dense (nb, ns) and (nb, nb) products."""
     scaled = shape_p / om2_e[None, :]
-    return scaled @ strip_gen, scaled @ bag_gen, scaled @ weight_gen
+    return np.ascontiguousarray(scaled), scaled @ weight_gen
 
 
 def wet_beam(scenario, hull: Hull):
@@ -329,8 +329,8 @@ def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
     nb = external.size
     om2_e, strip_e, bag_e, weight_e = (modes.omega[nr:] ** 2, lay.strip_gen[nr:],
                                        psi_b[:, nr:].T, lay.weight_gen[nr:])
-    cs, cb, cw = static_correction(psi_p[:, nr:], om2_e, strip_e, bag_e, weight_e)
-    ss, sbg, sw = static_correction(dpsi_p[:, nr:], om2_e, strip_e, bag_e, weight_e)
+    cs, cw = static_correction(psi_p[:, nr:], om2_e, weight_e)
+    ss, sw = static_correction(dpsi_p[:, nr:], om2_e, weight_e)
     relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)
     return Bags(
         nb=nb, shape=np.ascontiguousarray(psi_p[:, :nr]),
@@ -340,8 +340,8 @@ def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
         drag=np.where(external, hydro.drag_coefficient(
             rho, hy.bag_drag_coefficient, 1.0) * hydro.sphere_frontal_area(capacity), 0.0),
         purge_max=scenario.gas.purge_rate_max_m3_s, **gas_constants(scenario),
-        corr_strip=cs, corr_bag=cb, corr_weight=cw, slope_strip=ss, slope_bag=sbg,
-        slope_weight=sw)
+        corr_shape=cs, corr_weight=cw, slope_shape=ss, slope_weight=sw,
+        gen_strip=np.ascontiguousarray(strip_e), gen_bag=np.ascontiguousarray(bag_e))
 
 
 def seabed_record(scenario, plan: LiftPlan, nr: int, lay: Layout, hold: Holding) -> Seabed:

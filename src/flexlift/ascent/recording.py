@@ -38,12 +38,17 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
     if r >= recorder.t.size:
         return
     line = state.line + state.contact
-    z = state.z + plant.bags.corr_weight  # plus the static correction of the eliminated modes
-    matvec_add(plant.bags.corr_strip, line, z)
-    matvec_add(plant.bags.corr_bag, state.point, z)
+    # plus the static correction of the eliminated modes, through their generalised forces
+    # (records.Bags: factored, no bags x bags product)
+    ne = plant.bags.gen_strip.shape[0]
+    f_line = matvec(plant.bags.gen_strip, line, np.empty(ne))
+    f_point = matvec(plant.bags.gen_bag, state.point, np.empty(ne))
+    z = state.z + plant.bags.corr_weight
+    matvec_add(plant.bags.corr_shape, f_line, z)
+    matvec_add(plant.bags.corr_shape, f_point, z)
     slope = matvec(plant.bags.slope, state.q, np.empty(plant.bags.nb)) + plant.bags.slope_weight
-    matvec_add(plant.bags.slope_strip, line, slope)
-    matvec_add(plant.bags.slope_bag, state.point, slope)
+    matvec_add(plant.bags.slope_shape, f_line, slope)
+    matvec_add(plant.bags.slope_shape, f_point, slope)
     rate = matvec(plant.bags.slope, state.v, np.empty(plant.bags.nb))
     nb = plant.bags.nb
     out = recorder.bag[r]

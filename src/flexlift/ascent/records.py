@@ -98,16 +98,22 @@ class Bags(NamedTuple):
     p_atm                     Pa          atmospheric pressure
     rho_g                     N/m^3       seawater density times gravity
     water_depth               m           depth of the seabed (the ambient pressure)
-    corr_strip (nb, ns)       m / (N/m)   static correction of the heights per line load
-    corr_bag (nb, nb)         m/N         ... per unit bag force
+    corr_shape (nb, ne)       m / N       static correction of the heights per unit
+                                          generalised force of the ne eliminated modes
     corr_weight (nb,)         m           ... of the wet weight
-    slope_strip (nb, ns)      rad / (N/m) static correction of the slopes per line load
-    slope_bag (nb, nb)        rad/N       ... per unit bag force
+    slope_shape (nb, ne)      rad / N     static correction of the slopes per unit
+                                          generalised force of the eliminated modes
     slope_weight (nb,)        rad         ... of the wet weight
+    gen_strip (ne, ns)        m           eliminated modes' generalised force per line load
+    gen_bag (ne, nb)          -           ... per unit bag force
     ========================= =========== ==================================================
 
     The corrections are the eliminated modes' static (mdc) response: they enter the recorded
-    heights and slopes, not the mechanics.
+    heights and slopes, not the mechanics. They are kept factored (the height correction of
+    line loads ``line`` and bag forces ``point`` is ``corr_shape @ (gen_strip @ line) +
+    corr_shape @ (gen_bag @ point)``), so a recorded row costs O(ne (nb + ns)), not the
+    O(nb (nb + ns)) of the dense products (the paper's plant: ``corr_shape`` the identity,
+    its gains in ``gen_strip``, ``gen_bag``).
     """
 
     nb: int
@@ -124,12 +130,12 @@ class Bags(NamedTuple):
     p_atm: float
     rho_g: float
     water_depth: float
-    corr_strip: np.ndarray
-    corr_bag: np.ndarray
+    corr_shape: np.ndarray
     corr_weight: np.ndarray
-    slope_strip: np.ndarray
-    slope_bag: np.ndarray
+    slope_shape: np.ndarray
     slope_weight: np.ndarray
+    gen_strip: np.ndarray
+    gen_bag: np.ndarray
 
 
 class Seabed(NamedTuple):

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexlift._threads import one_blas_thread
 from flexlift.loads.strength import shear_moment
 
 #: grid points along the hull for the load and the bending moment
@@ -105,13 +106,15 @@ def refine(x, q, points, start: np.ndarray, bag_lift: float, x_target_moment: fl
         return moment_cost(x, M0, p, bag_lift)[0]
 
     scale = cost(start) or 1.0
-    res = minimize(lambda p: cost(p) / scale, start, jac=lambda p: moment_cost(x, M0, p, bag_lift)[1] / scale, method="SLSQP",
-                   bounds=[(0.0, length)] * start.size,
-                   constraints=[{"type": "eq",
-                                 "fun": lambda p: (bag_lift * p.sum() - x_target_moment)
-                                 / (bag_lift * length),
-                                 "jac": lambda p: np.ones_like(p) / length}],
-                   options={"maxiter": 200, "ftol": 1e-10})
+    with one_blas_thread():  # tens of unknowns: BLAS threads only wait (flexlift._threads)
+        res = minimize(lambda p: cost(p) / scale, start,
+                       jac=lambda p: moment_cost(x, M0, p, bag_lift)[1] / scale, method="SLSQP",
+                       bounds=[(0.0, length)] * start.size,
+                       constraints=[{"type": "eq",
+                                     "fun": lambda p: (bag_lift * p.sum() - x_target_moment)
+                                     / (bag_lift * length),
+                                     "jac": lambda p: np.ones_like(p) / length}],
+                       options={"maxiter": 200, "ftol": 1e-10})
     p = np.sort(res.x) if res.success and cost(res.x) <= cost(start) else start
     return p
 

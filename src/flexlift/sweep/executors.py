@@ -7,7 +7,8 @@ worker.run_case` and says how many cases it can usefully hold at once (``window`
 - :class:`Processes`: a :class:`~concurrent.futures.ProcessPoolExecutor` (the default, one
   worker per core). Workers are started with ``forkserver``: never forked from a parent that
   holds threads; the server imports flexlift and loads the compiled ascent once
-  (:mod:`.warm`), so each worker starts with both and runs case after case. A worker that dies breaks the pool: every case in
+  (:mod:`.warm`), so each worker starts with both and runs case after case; the server sets
+  one BLAS thread per worker before numpy loads (:mod:`flexlift._threads`). A worker that dies breaks the pool: every case in
   flight fails with ``BrokenProcessPool``, and the next submission starts a new pool;
 - :class:`DaskEngine`: ``distributed.Client.get_executor()`` on an existing scheduler
   (``--scheduler tcp://host:8786``) or a ``LocalCluster`` started here (``--dask-local N``).
@@ -124,8 +125,10 @@ class Processes:
         self.workers = int(workers)
         self.window = 2 * self.workers
         self._ctx = multiprocessing.get_context("forkserver")
-        # imported (and the compiled ascent loaded) once in the fork server, not per worker
-        self._ctx.set_forkserver_preload(["flexlift.sweep.worker", "flexlift.sweep.warm"])
+        # imported (and the compiled ascent loaded) once in the fork server, not per worker;
+        # first, before numpy loads there, one BLAS thread per worker (flexlift._threads)
+        self._ctx.set_forkserver_preload(["flexlift._worker_process", "flexlift.sweep.worker",
+                                          "flexlift.sweep.warm"])
         self._alive_r, self._alive_w = self._ctx.Pipe(duplex=False)  # see _init_worker
         self._pool = self._new()
 
