@@ -63,22 +63,17 @@ def test_recorded_row_matches_dense_correction(many_bags):
 
 def test_one_blas_thread_inside_and_restored_after():
     import scipy.optimize  # noqa: F401  (its OpenBLAS loaded too)
+    from threadpoolctl import threadpool_limits
 
-    from flexlift._threads import _openblas, blas_threads, one_blas_thread
+    from flexlift._threads import blas_threads, one_blas_thread
 
-    libs = _openblas()
-    if not libs:
-        pytest.skip("no OpenBLAS loaded in this process")
-    before = blas_threads()
-    try:
-        for _, put in libs:
-            put(2)
+    if not blas_threads():
+        pytest.skip("no BLAS loaded in this process")
+    with threadpool_limits(limits=2, user_api="blas"):
+        n = len(blas_threads())
         with one_blas_thread():
-            assert blas_threads() == [1] * len(libs)
-        assert blas_threads() == [2] * len(libs)
-    finally:
-        for (_, put), n in zip(libs, before):
-            put(n)
+            assert blas_threads() == [1] * n
+        assert blas_threads() == [2] * n
 
 
 def test_sweep_workers_run_one_blas_thread_and_leave_this_process_alone():
