@@ -267,6 +267,12 @@ def _limits_table(scenario, stages: list[StageOutput]) -> Table | None:
                  "scenario's (section limits).")
 
 
+def _title(stage: str) -> str:
+    """A stage's heading without the analysis's step number ("Lift plan and longitudinal
+    strength", not "2. Lift plan ..."): the report reads in a client's order, not the code's."""
+    return STAGE_TITLES.get(stage, stage).split(". ", 1)[-1]
+
+
 def _stage_sections(stages: list[StageOutput], level: int = 2) -> list[str]:
     """One section per stage (control modes as sub-sections): lead, tables, figures;
     ``level``: the stage headings' level (3 inside the appendix)."""
@@ -277,8 +283,7 @@ def _stage_sections(stages: list[StageOutput], level: int = 2) -> list[str]:
         base = "simulate" if base == "compare" else base
         if base not in seen:
             seen.add(base)
-            parts.append(f'<h{level} id="{_e(base)}">{_e(STAGE_TITLES.get(base, base))}'
-                         f"</h{level}>")
+            parts.append(f'<h{level} id="{_e(base)}">{_e(_title(base))}</h{level}>')
         if variant:
             parts.append(f'<h{level + 1} id="{_e(s.name)}">{_e(variant)} control</h{level + 1}>')
         elif s.name == "compare":  # its table carries the title "Control modes compared"
@@ -371,8 +376,8 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
     research = [s for s in stages if s.name.split(":")[0] not in BODY_STAGES]
     apart = bool(appendix_page and research)
     bases = dict.fromkeys("simulate" if s.name == "compare" else s.name.split(":")[0] for s in body)
-    nav = "".join(f'<li><a href="#{b}">{_e(STAGE_TITLES.get(b, b))}</a></li>' for b in bases)
-    nav += '<li><a href="#design-basis">Design basis</a></li>'
+    nav = '<li><a href="#design-basis">Design basis</a></li>'
+    nav += "".join(f'<li><a href="#{b}">{_e(_title(b))}</a></li>' for b in bases)
     if warnings:
         nav += '<li><a href="#warnings">Warnings</a></li>'
     if research or checks:
