@@ -303,3 +303,20 @@ def test_results_nc_modes_with_other_bags_and_no_strength_grid(tanker, tmp_path)
             want = v.values.astype(np.float32) if name in FLOAT32_VARS else v.values
             np.testing.assert_array_equal(back[name].values, want, err_msg=name)
             assert back[name].dtype == v.dtype and back[name].dims == v.dims, name
+
+
+def test_many_bags_are_listed_by_lift_point_on_the_page_and_every_bag_in_the_csv():
+    """The loads page lists lift points once there are more than a dozen bags (the trawler:
+    21 bags at 9 points); the CSV keeps a row per bag; the totals agree."""
+    from pathlib import Path
+
+    from flexlift.scenario import load_scenario
+    from flexlift.stages.loads import MAX_BAG_ROWS, bag_table, run_stage
+
+    trawler = load_scenario(Path(__file__).parent / "data" / "trawler.yaml")
+    out = run_stage(trawler)
+    page, every = out.tables[0], bag_table(out.summary)
+    assert len(every.rows) > MAX_BAG_ROWS and page.title.startswith("Lift points")
+    assert sum(r[2] for r in page.rows) == len(every.rows)
+    assert sum(r[7] for r in page.rows) == pytest.approx(sum(r[6] for r in every.rows), abs=0.1)
+    assert len(page.rows) < len(every.rows)

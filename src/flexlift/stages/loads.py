@@ -169,8 +169,14 @@ _ROWS = (
 )
 
 
-def _tables(summary: dict) -> list[Table]:
-    bags = Table(
+#: the most bags listed one per row on the report's page; more are grouped by lift point
+MAX_BAG_ROWS = 12
+
+
+def bag_table(summary: dict) -> Table:
+    """Every bag, one row each (``tables/loads_bags.csv``; on the page up to
+    :data:`MAX_BAG_ROWS` bags)."""
+    return Table(
         "Lift bags (full rated lift)",
         ["bag", "kind", "x [m]", "node", "span from [m]", "span to [m]", "lift [t]", "capacity [m3]"],
         [
@@ -182,12 +188,39 @@ def _tables(summary: dict) -> list[Table]:
             ]
             for b in summary["bags"]
         ],
-        note=(
-            f"Wet weight W' = {summary['wet_weight_t']:.0f} t; required lift "
-            f"{summary['breakout_factor']:g} W' = {summary['required_lift_t']:.0f} t; "
-            f"{summary['bag_count']} bags carry {summary['total_lift_t']:.0f} t ({summary['layout']})."
-        ),
+        csv="loads_bags.csv",
     )
+
+
+def lift_point_table(summary: dict) -> Table:
+    """The bags grouped by lift point (kind and position or span): one row per point with its
+    count, per-bag and total lift."""
+    groups: dict[tuple, list[dict]] = {}
+    for b in summary["bags"]:
+        key = (b["kind"], b["x_m"], tuple(b["span_m"]) if b["span_m"] else None)
+        groups.setdefault(key, []).append(b)
+    rows = []
+    for (kind, x, span), bs in groups.items():
+        lifts = sorted({b["lift_t"] for b in bs})
+        names = bs[0]["name"] if len(bs) == 1 else f"{bs[0]['name']}..{bs[-1]['name']}"
+        rows.append([names, kind, len(bs), x, span[0] if span else None,
+                     span[1] if span else None,
+                     lifts[0] if len(lifts) == 1 else f"{lifts[0]}-{lifts[-1]}",
+                     round(sum(b["lift_t"] for b in bs), 1), bs[0]["capacity_m3"]])
+    return Table(
+        "Lift points (full rated lift)",
+        ["bags", "kind", "count", "x [m]", "span from [m]", "span to [m]", "lift per bag [t]",
+         "lift [t]", "capacity per bag [m3]"],
+        rows, csv="loads_bags.csv")
+
+
+def _tables(summary: dict) -> list[Table]:
+    bags = bag_table(summary) if len(summary["bags"]) <= MAX_BAG_ROWS else lift_point_table(summary)
+    bags = Table(bags.title, bags.columns, bags.rows, csv=bags.csv, note=(
+        f"Wet weight W' = {summary['wet_weight_t']:.0f} t; required lift "
+        f"{summary['breakout_factor']:g} W' = {summary['required_lift_t']:.0f} t; "
+        f"{summary['bag_count']} bags carry {summary['total_lift_t']:.0f} t ({summary['layout']})."
+        + ("" if len(summary["bags"]) <= MAX_BAG_ROWS else " Every bag is a row of the CSV.")))
     cases = summary["design_cases"]
     peak = summary["max_moment_MNm"]
     st = Table(
@@ -296,7 +329,7 @@ def run_stage(scenario, out: Path | None = None, per_element: int = 50) -> Stage
                 "the peak marked, sagging positive.",
             )
         )
-        write_text(tdir / "loads_bags.csv", tables[0].to_csv())
+        write_text(tdir / "loads_bags.csv", bag_table(summary).to_csv())
         write_text(tdir / "loads_strength.csv", tables[1].to_csv())
         write_text(tdir / "loads_checks.csv", tables[2].to_csv())
         if paper is not None:
