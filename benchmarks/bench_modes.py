@@ -1,12 +1,12 @@
 """Benchmark of the modal solve: flexlift's sparse (flexibility Lanczos) solver against dense
 ``scipy.linalg.eigh(K, M, subset_by_index=...)`` on the same matrices, the 20,000-element
 case alone with its error against the analytic free-free frequencies, and all modes of a
-300-element hull (SPEC section 2: Phi^T M Phi = I and Phi^T K Phi = diag(omega^2) for every
+300-element hull (docs/theory/modes.md#mass-normalisation: Phi^T M Phi = I and Phi^T K Phi = diag(omega^2) for every
 mode returned) against dense ``eigh`` of all of them.
 
 Times are wall-clock seconds (best of a few runs for flexlift, one run for dense); memory is
 the peak of Python/NumPy allocations during the solve (tracemalloc), in bytes. Both start
-from the same assembled sparse K and M of a uniform tanker hull (SPEC section 1).
+from the same assembled sparse K and M of a uniform tanker hull (docs/theory/index.md#reference-case).
 """
 
 from __future__ import annotations
