@@ -90,6 +90,16 @@ POLICY: dict[str, tuple[str, str]] = {
     "hydro.added_mass_coefficient": ("assumed", "1.0 (a33 = Ca rho pi B^2/4 per length)"),
     "hydro.bag_drag_coefficient": ("assumed", "1.0 on a bag's frontal area"),
     "limits.pitch_deg": ("assumed", "15 deg, the paper's tilt limit"),
+    # the plan and the controllers' tuning: the paper's, used for every structure; the run's
+    # criteria then show whether they hold for this one
+    "control.ascent_speed_m_s": ("assumed", "0.2 m/s planned ascent, the paper's"),
+    "control.supervisor.error_scale_m": ("assumed", "5 m: the supervisor's full-scale height "
+                                         "error, the paper's tuning"),
+    "control.supervisor.rate_scale_m_s": ("assumed", "0.1 m/s: the supervisor's full-scale "
+                                          "rate, the paper's tuning"),
+    "control.purge.kp_1_m3": ("assumed", "the purge PID's gain, tuned on the paper's tanker"),
+    "control.coordination.pitch_gain_m3_rad": ("assumed", "the coordinated mode's pitch gain, "
+                                               "tuned on the paper's tanker"),
 }
 
 
