@@ -72,7 +72,7 @@ def refuse_unworkable(scenario, plant) -> None:
                          f"with no pull the hull never separates from its {_t(H0, plant.gravity):.0f} t "
                          "of suction; give a positive pull (default: 18 % of the suction)")
     relief, work = scenario.gas.relief_pressure_bar, scenario.lift.catalogue_bag.working_pressure_bar
-    if (~plant.external).any() and relief > work:
+    if (~plant.external).any() and work is not None and relief > work:
         raise InputError("gas.relief_pressure_bar", relief,
                          f"the closed (internal) bags would hold more over-pressure than their "
                          f"{work:g} bar working pressure; set the relief at or below it")
