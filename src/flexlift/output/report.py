@@ -171,7 +171,9 @@ def _particulars(scenario) -> str:
         ("Retained flexible modes", f"{scenario.simulation.retained_flexible_modes}"),
         ("Limits", f"ascent < {scenario.limits.ascent_velocity_m_s:g} m/s, "
                    f"descent < {scenario.limits.descent_velocity_m_s:g} m/s, "
-                   f"pitch < {scenario.limits.pitch_deg:g}°, no surface breach"),
+                   + ("no tilt criterion (the bending utilisation governs)"
+                      if scenario.limits.pitch_deg is None
+                      else f"pitch < {scenario.limits.pitch_deg:g}°") + ", no surface breach"),
         ("Supervisory controller", _controller_file(scenario, "supervisor")),
         ("Fill map", _controller_file(scenario, "fill")),
         ("Faults", _faults(scenario)),
@@ -259,6 +261,7 @@ def _limits_table(scenario, stages: list[StageOutput]) -> Table | None:
         values = [summary.get(key) for _, summary in runs]
         known = [abs(v) for v in values if isinstance(v, int | float)]
         used = f"{100 * max(known) / limit:.0f} %" if known and limit else None
+        limit = "none (not judged)" if limit is None else limit
         rows.append([f"{label} [{unit}]", limit, *values, used])
     rows.append(["outcome", "safe", *[summary.get("outcome") for _, summary in runs], None])
     return Table("The ascent against its limits",

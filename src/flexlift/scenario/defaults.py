@@ -89,7 +89,9 @@ POLICY: dict[str, tuple[str, str]] = {
     "hydro.drag_coefficient": ("assumed", "1.2 on the breadth (bluff hull sections 1-2)"),
     "hydro.added_mass_coefficient": ("assumed", "1.0 (a33 = Ca rho pi B^2/4 per length)"),
     "hydro.bag_drag_coefficient": ("assumed", "1.0 on a bag's frontal area"),
-    "limits.pitch_deg": ("assumed", "15 deg, the paper's tilt limit"),
+    "limits.pitch_deg": ("assumed", "2 deg: GL Noble Denton 0027/ND 5.3.2 for a lifted "
+                         "object, by analogy (the paper's 15 deg is the built-in tanker's); a "
+                         "pipe: no tilt criterion, its bending utilisation governs"),
 }
 
 
@@ -113,7 +115,9 @@ def _set(data: dict, dotted: str, value) -> None:
     *path, last = dotted.split(".")
     node = data
     for part in path:
-        node = node.setdefault(part, {})
+        if node.get(part) is None:  # an empty section (``lift:`` with nothing under it)
+            node[part] = {}
+        node = node[part]
     node[last] = value
 
 
@@ -152,6 +156,11 @@ def complete_own_structure(data: dict) -> dict:
     elif "section_modulus_m3" not in hull and _number(ei) and _number(depth) and depth > 0:
         hull["section_modulus_m3"] = 2.0 * ei / (E_STEEL * depth)
         defaulted["hull.section_modulus_m3"] = "derived"
+    limits = out.get("limits")
+    if (out.get("pipe") is not None and isinstance(limits, dict | None)
+            and not _given(out, "limits.pitch_deg")):  # a pipe: no tilt criterion
+        out["limits"] = {**(limits or {}), "pitch_deg": None}
+        defaulted["limits.pitch_deg"] = "derived"
     fills = {"hull.length_between_perpendiculars_m": None, "lift.internal_bags": 0,
              "seabed.holding_shape": "uniform"}
     for key, (policy, _) in POLICY.items():

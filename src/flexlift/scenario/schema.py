@@ -414,7 +414,10 @@ class Limits(_Section):
 
     ascent_velocity_m_s: real(0.001, 100) = 0.6  # the largest upward speed of any bag point
     descent_velocity_m_s: real(0.001, 100) = 0.6  # the largest downward speed once separated
-    pitch_deg: real(0.01, 90) = 15.0
+    # tilt: 2 deg, GL Noble Denton 0027/ND 5.3.2 for a lifted object, by analogy (the built-in
+    # tanker sets the paper's 15); null: no tilt criterion (a pipe's default: its bending
+    # utilisation governs)
+    pitch_deg: real(0.01, 90) | None = 2.0
     arrival_tolerance_m: real(0.001, 1_000) = 1.0
     surface_clearance_m: real(0, 1_000) = 0.0  # a bag top closer than this to the surface breaches
     slope_validity_deg: real(0.1, 45) = 10.0  # a warning beyond: the small-deflection beam's validity
