@@ -308,6 +308,22 @@ def _appendix_section(stages: list[StageOutput]) -> list[str]:
     return [_table(t) for s in stages for t in s.tables if _appendix(t)]
 
 
+def _basis(scenario) -> str:
+    """Every factor, limit and assumed value with its source, the catalogue bag, and the
+    factors that do not apply with their reason (scenario/basis.py)."""
+    from flexlift.scenario.basis import design_basis
+
+    def show(v):
+        return f"{v:g}" if isinstance(v, float | int) and not isinstance(v, bool) else str(v)
+
+    rows = "".join(f"<tr><td>{_e(r['item'])}</td><td>{_e(show(r['value']))}</td>"
+                   f"<td>{_e(r['source'])}</td><td>{_e(r['note'])}</td></tr>"
+                   for r in design_basis(scenario))
+    return ('<div class="keep"><h3 id="factors">Factors, limits and their sources</h3>'
+            "<table><tr><th>item</th><th>value</th><th>source</th><th>note</th></tr>"
+            f"{rows}</table></div>")
+
+
 def _assumed(scenario) -> str:
     """The values nobody gave (scenario/defaults.py): each with its rule or assumption."""
     from flexlift.scenario.defaults import assumed_summary
@@ -393,6 +409,7 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         f"<nav><ul>{nav}</ul></nav>",
         '<h2 id="design-basis">Design basis</h2>',
         _particulars(scenario),
+        _basis(scenario),
         _assumed(scenario),
     ]
     if lift:
