@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass
 
 from flexlift.errors import InputError
+from flexlift.loads.clusters import cluster_faults, cluster_lengths
 
 #: GL Noble Denton 0027/ND Table 11-1: consequence factor of lift points and their attachments
 CONSEQUENCE_LIFT_POINT = 1.30
@@ -42,12 +43,6 @@ def bag_height(bag) -> float:
     return bag.length_m if bag.type in UPRIGHT else bag.diameter_m
 
 
-def cluster_lengths(points, diameter: float, breadth: float) -> list[tuple[float, int, float]]:
-    """(x [m], bags n, hull length needed [m]) of each lift point ``points`` = [(x, names)]."""
-    across = max(1, math.floor(breadth / diameter + 1e-9))
-    return [(x, len(names), math.ceil(len(names) / across) * diameter) for x, names in points]
-
-
 def cluster_check(scenario, plan) -> Check:
     """Whether each external cluster fits on the hull, clear of its neighbours."""
     bag, hull = scenario.lift.catalogue_bag, scenario.hull
@@ -56,26 +51,13 @@ def cluster_check(scenario, plan) -> Check:
     if not rows:
         return Check("clusters", True, "no external bags: no cluster to arrange")
     across = max(1, math.floor(B / D + 1e-9))
-    faults = []
-    for k, (x, n, need) in enumerate(rows):
-        a, b = x - need / 2, x + need / 2
-        if a < -1e-9 or b > L + 1e-9:
-            faults.append((need - min(x, L - x) * 2, f"the {n} bag(s) at {x:.2f} m need "
-                           f"{need:.2f} m of hull ({a:.2f} .. {b:.2f} m), beyond the hull's "
-                           f"0 .. {L:g} m"))
-        if k + 1 < len(rows):
-            x2, n2, need2 = rows[k + 1]
-            gap = (x2 - x) - (need + need2) / 2
-            if gap < -1e-9:
-                faults.append((-gap, f"the {n} bag(s) at {x:.2f} m ({need:.2f} m of hull) and "
-                               f"the {n2} at {x2:.2f} m ({need2:.2f} m) overlap by {-gap:.2f} m"))
+    faults = cluster_faults(plan.lift_points(), D, B, L)
     rule = (f"{across} bag(s) of {D:g} m across the {B:g} m breadth, ceil(n / {across}) x {D:g} m "
             "of hull per lift point")
     if not faults:
         worst = max(rows, key=lambda r: r[2])
         return Check("clusters", True, f"every cluster fits ({rule}; the largest, {worst[1]} bag(s) "
                      f"at {worst[0]:.2f} m, needs {worst[2]:.2f} m)")
-    faults.sort(key=lambda f: -f[0])
     return Check("clusters", False, f"{faults[0][1]} ({rule}"
                  + (f"; {len(faults) - 1} more" if len(faults) > 1 else "")
                  + "); use a larger bag (fewer per point), more lift points, or move the bags")

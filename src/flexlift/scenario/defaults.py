@@ -89,6 +89,10 @@ POLICY: dict[str, tuple[str, str]] = {
     "hydro.drag_coefficient": ("assumed", "1.2 on the breadth (bluff hull sections 1-2)"),
     "hydro.added_mass_coefficient": ("assumed", "1.0 (a33 = Ca rho pi B^2/4 per length)"),
     "hydro.bag_drag_coefficient": ("assumed", "1.0 on a bag's frontal area"),
+    "lift.catalogue_bag": ("derived", "the largest standard open parachute bag <= 50 t "
+                           "(flexlift/data/bags.yaml) whose cluster per lift point fits on the "
+                           "hull (loads/clusters.py; the tanker's 565 t cylinder is not "
+                           "assumed)"),
     "limits.pitch_deg": ("assumed", "2 deg: GL Noble Denton 0027/ND 5.3.2 for a lifted "
                          "object, by analogy (the paper's 15 deg is the built-in tanker's); a "
                          "pipe: no tilt criterion, its bending utilisation governs"),
@@ -156,6 +160,11 @@ def complete_own_structure(data: dict) -> dict:
     elif "section_modulus_m3" not in hull and _number(ei) and _number(depth) and depth > 0:
         hull["section_modulus_m3"] = 2.0 * ei / (E_STEEL * depth)
         defaulted["hull.section_modulus_m3"] = "derived"
+    lift = out.get("lift")
+    if (out.get("pipe") is None and isinstance(lift, dict | None)
+            and not _given(out, "lift.catalogue_bag")):  # the first standard size tried
+        out["lift"] = {**(lift or {}), "catalogue_bag": {"model": "open_parachute_50t"}}
+        defaulted["lift.catalogue_bag"] = "derived"
     limits = out.get("limits")
     if (out.get("pipe") is not None and isinstance(limits, dict | None)
             and not _given(out, "limits.pitch_deg")):  # a pipe: no tilt criterion
