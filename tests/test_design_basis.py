@@ -3,6 +3,7 @@ in the report's Design basis section and summary.json."""
 
 import html
 import json
+import math
 import re
 from pathlib import Path
 
@@ -81,3 +82,19 @@ def test_the_report_and_summary_json_carry_it():
     summary = summary_of(tanker, [stage], 1.0)
     json.dumps(summary)
     assert {r["item"] for r in summary["design_basis"]} == set(_rows(tanker))
+
+
+def test_a_weight_contingency_is_the_users_and_scales_the_lift_to_provide():
+    from flexlift import constants as C
+    from flexlift.errors import InputError
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.structure.hull import hull_from_scenario
+
+    tanker = load_scenario("tanker").with_changes(**{"lift.layout": "balanced"})
+    s = tanker.with_changes(**{"lift.weight_contingency": 1.1})
+    base, plan = (plan_lift(x, hull_from_scenario(x)) for x in (tanker, s))
+    assert plan.required_lift == pytest.approx(1.1 * base.required_lift, rel=1e-12)
+    assert plan.bag_count == math.ceil(1.1 * base.required_lift / (C.TONNE * 9.81) / 565.0)
+    assert plan.wet_weight == base.wet_weight  # the physics keeps the structure's weight
+    with pytest.raises(InputError, match="weight_contingency"):
+        tanker.with_changes(**{"lift.weight_contingency": 0.9})  # a factor below 1

@@ -52,3 +52,10 @@ def test_the_pitch_criterion_is_skipped_and_said_when_it_does_not_apply(pitch):
         assert "pitch" not in r.criteria and NO_TILT in r.warnings
     else:  # a limit given is judged
         assert "pitch" in r.criteria and NO_TILT not in r.warnings
+
+
+def test_an_empty_section_of_a_users_hull_is_an_empty_section_not_a_crash():
+    from flexlift.errors import InputError
+
+    with pytest.raises(InputError, match="water_depth_m is missing"):
+        parse_scenario({"hull": {"length_m": 60.0}, "lift": None, "seabed": None})
