@@ -69,3 +69,18 @@ def test_the_command_line_chooses_it(tmp_path, monkeypatch):
     chosen, plan = scenario_from(argparse.Namespace(scenario=str(f)))
     assert chosen == "chosen" and plan.bag_count == math.ceil(
         1.3 * 800.0 * (1 - 1025 / 7850) / 50.0)
+
+
+def test_a_sweeps_base_gets_it_too(tmp_path, monkeypatch):
+    from flexlift.sweep.spec import parse_spec
+
+    f = tmp_path / "barge.yaml"
+    f.write_text(yaml.safe_dump(HULL))
+    seen = []
+    real = clusters.default_bag
+    monkeypatch.setattr(clusters, "default_bag",
+                        lambda sc, plan_of: seen.append(sc.name) or real(sc, plan_of))
+    spec = parse_spec({"base": str(f), "control": ["coordinated"],
+                       "grid": {"seabed.breakout_time_s": [30, 60]}})
+    assert seen == ["barge"]
+    assert spec.base.lift.catalogue_bag.model.startswith("open_parachute_")
