@@ -3,7 +3,7 @@ docs/theory/factors.md#rigging): each says what it found, with its numbers and t
 
 - clusters: a cluster of n bags of diameter D at one lift point, floor(B / D) of them across
   the breadth B (at least one), needs ceil(n / floor(B / D)) D of hull length centred on its
-  lift point, inside the hull and clear of the neighbouring clusters;
+  lift point, inside the hull and clear of the neighbouring clusters (:mod:`flexlift.loads.clusters`);
 - headroom: a bag's height and its sling against the water above the hull at the target;
 - rated depth: the catalogue bag's rated depth against the wreck's depth (the water depth);
 - rigging: each sling's design load is its bag's full true lift, capacity_factor x the larger
@@ -17,11 +17,10 @@ docs/theory/factors.md#rigging): each says what it found, with its numbers and t
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from flexlift.errors import InputError
-from flexlift.loads.clusters import cluster_faults, cluster_lengths
+from flexlift.loads.clusters import across, cluster_faults, cluster_lengths
 
 #: GL Noble Denton 0027/ND Table 11-1: consequence factor of lift points and their attachments
 CONSEQUENCE_LIFT_POINT = 1.30
@@ -50,9 +49,9 @@ def cluster_check(scenario, plan) -> Check:
     rows = cluster_lengths(plan.lift_points(), D, B)
     if not rows:
         return Check("clusters", True, "no external bags: no cluster to arrange")
-    across = max(1, math.floor(B / D + 1e-9))
+    k = across(D, B)
     faults = cluster_faults(plan.lift_points(), D, B, L)
-    rule = (f"{across} bag(s) of {D:g} m across the {B:g} m breadth, ceil(n / {across}) x {D:g} m "
+    rule = (f"{k} bag(s) of {D:g} m across the {B:g} m breadth, ceil(n / {k}) x {D:g} m "
             "of hull per lift point")
     if not faults:
         worst = max(rows, key=lambda r: r[2])
