@@ -10,6 +10,7 @@ from flexlift.cli._common import scenario_from
 from flexlift.loads import clusters
 from flexlift.loads.clusters import cluster_faults, default_bag
 from flexlift.scenario import load_scenario
+from flexlift.scenario.defaults import assumed_summary
 from flexlift.scenario.schema import parse_scenario
 
 HULL = {"name": "barge", "environment": {"water_depth_m": 80.0},
@@ -32,6 +33,8 @@ def test_a_users_hull_without_a_bag_gets_the_50_t_parachute_bag_derived():
     s = parse_scenario(HULL)
     assert s.lift.catalogue_bag.model == "open_parachute_50t"
     assert s.defaulted["lift.catalogue_bag"] == "derived"
+    assert any(n.startswith("lift.catalogue_bag = open_parachute_50t (derived: the largest")
+               for n in assumed_summary(s))
     assert "lift.catalogue_bag" not in parse_scenario(
         {**HULL, "lift": {"catalogue_bag": {"model": "enclosed_20t"}}}).defaulted
     assert load_scenario("tanker").lift.catalogue_bag.model == "paper_cylinder_565t"

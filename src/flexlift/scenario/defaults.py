@@ -237,6 +237,8 @@ def assumed_summary(scenario) -> list[str]:
 
 
 def _show(v) -> str:
+    if isinstance(v, dict) and v.get("model"):  # a catalogue bag: its model's name
+        return str(v["model"])
     if isinstance(v, float):
         return f"{v:.4g}"
     return "none" if v is None else str(v)
