@@ -162,9 +162,13 @@ def test_an_empty_file_is_refused_not_read_as_the_tanker(tmp_path, capsys, text)
 def test_name_tanker_is_the_tanker(tmp_path, tanker):
     """Every default is the tanker's, but for the lift plan a user's hull gets: the balanced
     layout and the breakout pull in proportion to the suction (the built-in tanker file keeps
-    the paper's nodes of mode 3 and 150 t)."""
+    the paper's nodes of mode 3 and 150 t), and the schema's tilt limit, 2 deg (0027/ND 5.3.2 by
+    analogy; the built-in file sets the paper's 15 deg and names its catalogue bag)."""
     again = load_scenario(_write(tmp_path, "name: tanker\n"))
-    assert again.with_changes(**{"lift.layout": "mode_nodes", "control.breakout_pull_t": 150.0}
+    assert again.limits.pitch_deg == 2.0 and again.lift.catalogue_bag.model is None
+    assert again.with_changes(**{"lift.layout": "mode_nodes", "control.breakout_pull_t": 150.0,
+                                 "limits.pitch_deg": 15.0,
+                                 "lift.catalogue_bag.model": "paper_cylinder_565t"}
                               ).model_dump(exclude={"description"}) == tanker.model_dump(
         exclude={"description"})
     assert again.lift.layout == "balanced" and again.control.breakout_pull_t is None

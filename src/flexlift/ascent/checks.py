@@ -14,6 +14,7 @@ calls it. The others are warnings, shown by ``flexlift loads`` and in the report
 - duration: the separation, the ascent at the planned (valve-limited) speed and the hold
   against ``simulation.duration_s`` (a run too short ends *incomplete*);
 - hull girder stress under the plan: sigma = M / Z against the allowable stress;
+- the arrangement and rigging (:mod:`flexlift.ascent.arrangement`);
 - a staged lift: whether the structure is flexible enough to peel off in its stages.
 """
 
@@ -21,11 +22,11 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from flexlift import constants as C
+from flexlift.ascent.arrangement import Check, arrangement_checks, lift_point_capacities
 from flexlift.control.build import bag_pulls, breakout_pull
 from flexlift.control.profile import speed_limit
 from flexlift.control.reference import trapezoid
@@ -35,15 +36,6 @@ from flexlift.loads.statics import suspended_length
 from flexlift.physics import seabed
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class Check:
-    """One check of the plan: ``ok`` or not, and a one-line ``message`` (numbers and fix)."""
-
-    name: str
-    ok: bool
-    message: str
 
 
 def _t(force: float, g: float) -> float:
@@ -71,8 +63,9 @@ def refuse_unworkable(scenario, plant) -> None:
         raise InputError("control.breakout_pull_t", c.breakout_pull_t,
                          f"with no pull the hull never separates from its {_t(H0, plant.gravity):.0f} t "
                          "of suction; give a positive pull (default: 18 % of the suction)")
+    lift_point_capacities(scenario, plant.plan)  # a list of the wrong length: one line
     relief, work = scenario.gas.relief_pressure_bar, scenario.lift.catalogue_bag.working_pressure_bar
-    if (~plant.external).any() and relief > work:
+    if (~plant.external).any() and work is not None and relief > work:
         raise InputError("gas.relief_pressure_bar", relief,
                          f"the closed (internal) bags would hold more over-pressure than their "
                          f"{work:g} bar working pressure; set the relief at or below it")
@@ -82,7 +75,7 @@ def plan_checks(scenario, plant) -> list[Check]:
     """Every warning-level check of ``plant``'s lift plan (module docstring)."""
     checks = [balance_check(plant), breakout_check(scenario, plant),
               purge_check(scenario, plant), fill_check(scenario, plant),
-              duration_check(scenario, plant)]
+              duration_check(scenario, plant)] + arrangement_checks(scenario, plant.plan)
     if scenario.control.sequence is not None:
         checks.append(sequence_check(scenario, plant))
     return checks

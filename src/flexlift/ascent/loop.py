@@ -121,7 +121,7 @@ class Ascent:
             k_str=max(1, int(round(sim.strength_interval_s / dt))),
             target=c.target_height_m, tol=lim.arrival_tolerance_m, hold_time=sim.hold_time_s,
             v_limit=lim.ascent_velocity_m_s, v_down_limit=lim.descent_velocity_m_s,
-            pitch_limit=math.radians(lim.pitch_deg),
+            pitch_limit=math.radians(90.0 if lim.pitch_deg is None else lim.pitch_deg),
             top_limit=bags.water_depth - lim.surface_clearance_m - bags.top_offset,
             external=self.external is not None)
         self.state = new_run_state(modal.nr, bags.nb, strips.ns, seabed.ng)

@@ -288,7 +288,7 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
     kinds = {e["kind"] for e in events}
     crit = {"ascent_velocity": vmax < sc.limits.ascent_velocity_m_s,
             "descent_velocity": vdown < sc.limits.descent_velocity_m_s,
-            "pitch": float(np.degrees(pmax)) < sc.limits.pitch_deg,
+            "pitch": sc.limits.pitch_deg is None or float(np.degrees(pmax)) < sc.limits.pitch_deg,
             "reached_target": "target_held" in kinds,
             "no_surface_breach": "surface_breach" not in kinds,
             "no_resettle": "resettle" not in kinds,
@@ -325,11 +325,19 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
     if outcome.kind in ("incomplete", "not_achieved"):
         reasons["reached_target"] = outcome.cause
     warnings = slope_warnings(ds, sc.limits.slope_validity_deg)
+    if sc.limits.pitch_deg is None:  # the tilt criterion does not apply: said, not judged
+        del crit["pitch"]
+        warnings.append(NO_TILT)
     ds.attrs.update(warnings=json.dumps(warnings),title=f"flexlift ascent of {sc.name}, {run.mode} control", scenario=sc.name,
                     scenario_checksum=sc.checksum(), control=run.mode, events=json.dumps(events),
                     criteria=json.dumps(crit), reasons=json.dumps(reasons),
                     outcome=json.dumps(outcome.as_dict()), headline=json.dumps(headline), error=error or "",
                     max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax)
+
+
+#: the run's note when limits.pitch_deg is null
+NO_TILT = ("no tilt criterion (limits.pitch_deg: null, a pipe's default): the pitch is not "
+           "judged; the bending utilisation governs")
 
 
 def utilisation_reason(ds, sc) -> str:
@@ -416,7 +424,7 @@ def explain(run, events, crit, vmax: float, vdown: float, pmax: float, error) ->
         if settle:
             text += f", and resettled on the seabed at {settle['time_s']:.0f} s"
         out["descent_velocity"] = text
-    if not crit["pitch"]:
+    if not crit["pitch"]:  # explained before the inapplicable criterion is dropped
         e = first("limit_pitch")
         out["pitch"] = (f"{_fault_before(events, e and e['time_s'])}the pitch passed "
                         f"{lim.pitch_deg:g} deg" + (f" at {e['time_s']:.0f} s" if e else "")

@@ -38,7 +38,7 @@ class Bag:
     span : (x0, x1) or None — extent of an internal bag's uniform load [m]
     node : int or None — 0-based node of an external bag when it sits on one
     lift : float — rated (full) lift force [N]
-    capacity : float — gas volume at full lift, lift / (rho_sw g) [m^3]
+    capacity : float — true gas capacity, capacity_factor x lift / (rho_sw g) [m^3]
     """
 
     name: str
@@ -178,7 +178,8 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
         raise InputError("hull", f"wet weight {wet / (C.TONNE * g):.0f} t",
                          "the structure floats in seawater: nothing to lift; check its masses, "
                          "densities and contents")
-    required = lift.breakout_factor * wet
+    # the user's weight contingency (none: none) scales the lift to provide, not the physics
+    required = lift.breakout_factor * wet * (lift.weight_contingency or 1.0)
     cat = lift.catalogue_bag.lift_t * C.TONNE * g
     n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)
     # the schema's cost check estimated the automatic layout's count; here it is exact
@@ -191,8 +192,11 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
         per_t = lift.bag_lift_t
     per = per_t * C.TONNE * g
 
+    factor = lift.catalogue_bag.capacity_factor  # true gas capacity over the rated one
+
     def make(name, kind, x, span, node, lift_force):
-        return Bag(name, kind, float(x), span, node, float(lift_force), lift_force / (rho * g))
+        return Bag(name, kind, float(x), span, node, float(lift_force),
+                   factor * lift_force / (rho * g))
 
     if lift.bags is not None:
         bags, layout = _explicit_bags(lift.bags, hull, per, g, make), "explicit"

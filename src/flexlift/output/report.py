@@ -171,7 +171,9 @@ def _particulars(scenario) -> str:
         ("Retained flexible modes", f"{scenario.simulation.retained_flexible_modes}"),
         ("Limits", f"ascent < {scenario.limits.ascent_velocity_m_s:g} m/s, "
                    f"descent < {scenario.limits.descent_velocity_m_s:g} m/s, "
-                   f"pitch < {scenario.limits.pitch_deg:g}°, no surface breach"),
+                   + ("no tilt criterion (the bending utilisation governs)"
+                      if scenario.limits.pitch_deg is None
+                      else f"pitch < {scenario.limits.pitch_deg:g}°") + ", no surface breach"),
         ("Supervisory controller", _controller_file(scenario, "supervisor")),
         ("Fill map", _controller_file(scenario, "fill")),
         ("Faults", _faults(scenario)),
@@ -259,6 +261,7 @@ def _limits_table(scenario, stages: list[StageOutput]) -> Table | None:
         values = [summary.get(key) for _, summary in runs]
         known = [abs(v) for v in values if isinstance(v, int | float)]
         used = f"{100 * max(known) / limit:.0f} %" if known and limit else None
+        limit = "none (not judged)" if limit is None else limit
         rows.append([f"{label} [{unit}]", limit, *values, used])
     rows.append(["outcome", "safe", *[summary.get("outcome") for _, summary in runs], None])
     return Table("The ascent against its limits",
@@ -308,6 +311,22 @@ def _appendix(t) -> bool:
 def _appendix_section(stages: list[StageOutput]) -> list[str]:
     """The tables that belong to the appendix (the paper's own), after its stages."""
     return [_table(t) for s in stages for t in s.tables if _appendix(t)]
+
+
+def _basis(scenario) -> str:
+    """Every factor, limit and assumed value with its source, the catalogue bag, and the
+    factors that do not apply with their reason (scenario/basis.py)."""
+    from flexlift.scenario.basis import design_basis
+
+    def show(v):
+        return f"{v:g}" if isinstance(v, float | int) and not isinstance(v, bool) else str(v)
+
+    rows = "".join(f"<tr><td>{_e(r['item'])}</td><td>{_e(show(r['value']))}</td>"
+                   f"<td>{_e(r['source'])}</td><td>{_e(r['note'])}</td></tr>"
+                   for r in design_basis(scenario))
+    return ('<div class="keep"><h3 id="factors">Factors, limits and their sources</h3>'
+            "<table><tr><th>item</th><th>value</th><th>source</th><th>note</th></tr>"
+            f"{rows}</table></div>")
 
 
 def _assumed(scenario) -> str:
@@ -395,6 +414,7 @@ def render_report(scenario, stages: list[StageOutput], generated: datetime | Non
         f"<nav><ul>{nav}</ul></nav>",
         '<h2 id="design-basis">Design basis</h2>',
         _particulars(scenario),
+        _basis(scenario),
         _assumed(scenario),
     ]
     if lift:

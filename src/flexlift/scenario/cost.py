@@ -150,7 +150,8 @@ def count_bags(scenario) -> tuple[int, int]:
         mass_t = mean * hull.length_m / 1000.0
     mass_t += sum(p.mass_t for p in hull.point_masses)
     wet_t = mass_t * max(0.0, 1.0 - env.seawater_density_kg_m3 / env.steel_density_kg_m3)
-    n = max(1, math.ceil(lift.breakout_factor * wet_t / lift.catalogue_bag.lift_t - 1e-9))
+    need_t = lift.breakout_factor * (lift.weight_contingency or 1.0) * wet_t
+    n = max(1, math.ceil(need_t / lift.catalogue_bag.lift_t - 1e-9))
     return n, max(0, n - min(lift.internal_bags, n))
 
 

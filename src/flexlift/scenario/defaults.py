@@ -89,7 +89,13 @@ POLICY: dict[str, tuple[str, str]] = {
     "hydro.drag_coefficient": ("assumed", "1.2 on the breadth (bluff hull sections 1-2)"),
     "hydro.added_mass_coefficient": ("assumed", "1.0 (a33 = Ca rho pi B^2/4 per length)"),
     "hydro.bag_drag_coefficient": ("assumed", "1.0 on a bag's frontal area"),
-    "limits.pitch_deg": ("assumed", "15 deg, the paper's tilt limit"),
+    "lift.catalogue_bag": ("derived", "the largest standard open parachute bag <= 50 t "
+                           "(flexlift/data/bags.yaml) whose cluster per lift point fits on the "
+                           "hull (loads/clusters.py; the tanker's 565 t cylinder is not "
+                           "assumed)"),
+    "limits.pitch_deg": ("assumed", "2 deg: GL Noble Denton 0027/ND 5.3.2 for a lifted "
+                         "object, by analogy (the paper's 15 deg is the built-in tanker's); a "
+                         "pipe: no tilt criterion, its bending utilisation governs"),
     # the plan and the controllers' tuning: the paper's, used for every structure; the run's
     # criteria then show whether they hold for this one
     "control.ascent_speed_m_s": ("assumed", "0.2 m/s planned ascent, the paper's"),
@@ -123,7 +129,9 @@ def _set(data: dict, dotted: str, value) -> None:
     *path, last = dotted.split(".")
     node = data
     for part in path:
-        node = node.setdefault(part, {})
+        if node.get(part) is None:  # an empty section (``lift:`` with nothing under it)
+            node[part] = {}
+        node = node[part]
     node[last] = value
 
 
@@ -162,6 +170,16 @@ def complete_own_structure(data: dict) -> dict:
     elif "section_modulus_m3" not in hull and _number(ei) and _number(depth) and depth > 0:
         hull["section_modulus_m3"] = 2.0 * ei / (E_STEEL * depth)
         defaulted["hull.section_modulus_m3"] = "derived"
+    lift = out.get("lift")
+    if (out.get("pipe") is None and isinstance(lift, dict | None)
+            and not _given(out, "lift.catalogue_bag")):  # the first standard size tried
+        out["lift"] = {**(lift or {}), "catalogue_bag": {"model": "open_parachute_50t"}}
+        defaulted["lift.catalogue_bag"] = "derived"
+    limits = out.get("limits")
+    if (out.get("pipe") is not None and isinstance(limits, dict | None)
+            and not _given(out, "limits.pitch_deg")):  # a pipe: no tilt criterion
+        out["limits"] = {**(limits or {}), "pitch_deg": None}
+        defaulted["limits.pitch_deg"] = "derived"
     fills = {"hull.length_between_perpendiculars_m": None, "lift.internal_bags": 0,
              "seabed.holding_shape": "uniform"}
     for key, (policy, _) in POLICY.items():
@@ -229,6 +247,8 @@ def assumed_summary(scenario) -> list[str]:
 
 
 def _show(v) -> str:
+    if isinstance(v, dict) and v.get("model"):  # a catalogue bag: its model's name
+        return str(v["model"])
     if isinstance(v, float):
         return f"{v:.4g}"
     return "none" if v is None else str(v)

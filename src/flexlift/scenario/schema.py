@@ -39,7 +39,7 @@ from pydantic import (
 from flexlift import constants as C
 from flexlift.errors import InputError, brief, clean
 from flexlift.plumbing import reading
-from flexlift.scenario import cost
+from flexlift.scenario import catalogue, cost
 from flexlift.scenario.defaults import (
     complete_own_structure,
     describes_own_structure,
@@ -155,12 +155,37 @@ BagLift = real(0.01, MAX_BAG_LIFT_T)  # [t]: 10 kg pillow bags .. the largest bu
 
 
 class CatalogueBag(_Section):
-    """The lift bag as sold."""
+    """The lift bag as sold: a catalogue ``model`` (scenario/catalogue.py; the fields given
+    here override the model's) or explicit fields (default: the paper's cylinder)."""
 
+    model: Name | None = None  # an entry of the bag catalogue (flexlift/data/bags.yaml)
+    type: Literal["open_parachute", "closed_parachute", "enclosed",
+                  "pressurised_cylinder"] = "pressurised_cylinder"
     diameter_m: real(0.05, 20) = 1.5
-    length_m: real(0.05, 50) = 18.0
-    lift_t: BagLift = 565.0
-    working_pressure_bar: real(0.1, 50) = 2.8
+    length_m: real(0.05, 50) = 18.0  # upright bags (parachute): the height, mouth down
+    lift_t: BagLift = 565.0  # rated lift
+    working_pressure_bar: real(0.1, 50) | None = 2.8  # pressurised cylinders; none: not stated
+    relief_bar: real(0.001, 10) | None = None  # closed and enclosed bags: over ambient
+    dump_valve_m3_s: real(1e-6, 100) | None = None  # the maker's dump-valve capacity
+    rated_depth_m: real(0.1, 12_000) | None = None  # the maker's; none: not given
+    # true gas capacity over the rated one (a published incident: 1.25); the bag-count rule
+    # decides how many bags, this factor their gas capacity
+    capacity_factor: Annotated[Real, Field(gt=0, le=10)] = 1.0
+
+
+class Rigging(_Section):
+    """Slings, shackles and lift points (docs/theory/factors.md#rigging): each sling's design
+    load is its bag's full true lift (a fill valve stuck open fills it); a lift point's
+    capacity is compared with its design load x the consequence factor 1.30."""
+
+    sling_wll_t: Annotated[Real, Field(gt=0, le=MAX_BAG_LIFT_T * 10)] | None = None  # per bag
+    cluster_wll_t: Annotated[Real, Field(gt=0, le=1e7)] | None = None  # per lift point's gear
+    sling_length_m: real(0, 1_000) = 0.0  # from the lift point to the bag's mouth
+    # each external lift point's structural capacity [t], aft to bow (one number: every point)
+    lift_point_capacity_t: (Annotated[Real, Field(gt=0, le=1e7)]
+                            | Annotated[list[Annotated[Real, Field(gt=0, le=1e7)]],
+                                        Field(min_length=1, max_length=MAX_ITEMS)]
+                            | None) = None
 
 
 class BagSpec(_Section):
@@ -199,6 +224,9 @@ class Lift(_Section):
 
     breakout_factor: real(1, 5) = 1.3  # required lift / wet weight; 1.3 typical, stiff clay ~2
     catalogue_bag: CatalogueBag = CatalogueBag()
+    catalogue_file: Annotated[Text, Field(max_length=4096)] | None = None  # extends the catalogue
+    rigging: Rigging = Rigging()
+    weight_contingency: real(1, 2) | None = None  # the user's factor on the weight; none: none
     internal_bags: whole(0, MAX_ITEMS) = 3
     # balanced: lift centroid on the centre of gravity, small static bending moment (a user's
     # hull); mode_nodes: the paper's rule, external bags at the nodes of a flexible mode
@@ -206,6 +234,21 @@ class Lift(_Section):
     layout_flexible_mode: whole(1, 100) = 3  # mode_nodes: the flexible mode whose nodes carry the bags
     bag_lift_t: BagLift | None = None  # modelled lift per bag; default from the bag-count rule
     bags: Annotated[list[BagSpec], Field(max_length=MAX_ITEMS)] | None = None  # explicit layout
+
+    @model_validator(mode="before")
+    @classmethod
+    def _model(cls, data):
+        """A catalogue model's fields under the explicit ones (scenario/catalogue.py)."""
+        if not isinstance(data, dict):
+            return data
+        bag, file = data.get("catalogue_bag"), data.get("catalogue_file")
+        if (not isinstance(bag, dict) or not isinstance(bag.get("model"), str)
+                or not isinstance(file, str | None)):
+            return data  # no model (or a wrong type): the schema reports it
+        entry = catalogue.resolve(bag["model"], file)
+        merged = {k: v for k, v in entry.items() if k in CatalogueBag.model_fields}
+        merged.update(bag)
+        return {**data, "catalogue_bag": merged}
 
     @field_validator("bags")
     @classmethod
@@ -371,7 +414,10 @@ class Limits(_Section):
 
     ascent_velocity_m_s: real(0.001, 100) = 0.6  # the largest upward speed of any bag point
     descent_velocity_m_s: real(0.001, 100) = 0.6  # the largest downward speed once separated
-    pitch_deg: real(0.01, 90) = 15.0
+    # tilt: 2 deg, GL Noble Denton 0027/ND 5.3.2 for a lifted object, by analogy (the built-in
+    # tanker sets the paper's 15); null: no tilt criterion (a pipe's default: its bending
+    # utilisation governs)
+    pitch_deg: real(0.01, 90) | None = 2.0
     arrival_tolerance_m: real(0.001, 1_000) = 1.0
     surface_clearance_m: real(0, 1_000) = 0.0  # a bag top closer than this to the surface breaches
     slope_validity_deg: real(0.1, 45) = 10.0  # a warning beyond: the small-deflection beam's validity
@@ -717,5 +763,11 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     if not isinstance(data, dict):
         raise InputError(source, type(data).__name__, "a scenario file must hold a YAML mapping "
                          "of keys (name: ..., hull: ..., ...)")
+    lift = data.get("lift")
+    if (reading.exists(path) and isinstance(lift, dict)
+            and isinstance(lift.get("catalogue_file"), str)
+            and not Path(lift["catalogue_file"]).is_absolute()):  # relative to the file's folder
+        data = {**data, "lift": {**lift, "catalogue_file": reading.absolute(
+            path.parent / lift["catalogue_file"])}}
     scenario = parse_scenario(data, source=source)
     return _resolve_files(scenario, path.parent) if reading.exists(path) else scenario

@@ -21,6 +21,7 @@ from flexlift import __version__
 from flexlift.output.report import STAGE_TITLES
 from flexlift.output.stage import StageOutput
 from flexlift.scenario import ControlMode
+from flexlift.scenario.basis import design_basis
 
 STAGES = ("modes", "loads", "reduce", "fuzzy", "simulate")
 CONTROL_MODES = typing.get_args(ControlMode)
@@ -121,5 +122,7 @@ def summary_of(scenario, outputs: list[StageOutput], elapsed_s: float) -> dict:
         "all_criteria_passed": all(criteria.values()) if criteria else None,
         "criteria": criteria,
         "warnings": [w for o in outputs for w in o.warnings],
+        # every factor, limit and assumed value with its source (scenario/basis.py)
+        "design_basis": design_basis(scenario),
         "stages": stages,
     }

@@ -51,7 +51,7 @@ def limits_of(base, values: dict | None = None) -> dict:
             out[name] = 1.0
         elif key in values:
             out[name] = float(values[key])
-        else:
+        elif getattr(base.limits, key.split(".", 1)[1]) is not None:  # null: no criterion
             out[name] = float(getattr(base.limits, key.split(".", 1)[1]))
     return out
 
