@@ -98,3 +98,14 @@ def test_a_weight_contingency_is_the_users_and_scales_the_lift_to_provide():
     assert plan.wet_weight == base.wet_weight  # the physics keeps the structure's weight
     with pytest.raises(InputError, match="weight_contingency"):
         tanker.with_changes(**{"lift.weight_contingency": 0.9})  # a factor below 1
+
+
+def test_a_packaged_catalogue_bag_is_not_called_the_users():
+    """The default bag of a user's hull comes from flexlift's own catalogue, and says so."""
+    from flexlift.scenario.basis import _catalogue_rows
+    from flexlift.scenario.schema import parse_scenario
+
+    s = parse_scenario({"based_on": "tanker",
+                        "lift": {"catalogue_bag": {"model": "open_parachute_20t"}}})
+    src = _catalogue_rows(s)[0]["source"]
+    assert "flexlift's catalogue" in src and "your catalogue file" not in src

@@ -91,7 +91,10 @@ def _catalogue_rows(scenario) -> list[dict]:
     note = ""
     if bag.model is not None:
         entry = catalogue.load(scenario.lift.catalogue_file).get(bag.model, {})
-        src = f"catalogue: {bag.model} ({entry.get('source', 'your catalogue file')})"
+        packaged = bag.model in catalogue.load(None)
+        where = ("flexlift's catalogue: generic, by stated rules" if packaged
+                 else f"your catalogue file {scenario.lift.catalogue_file}")
+        src = f"catalogue: {bag.model} ({entry.get('source', where)})"
         if entry.get("as_published"):
             note = (f"kept as published: a {bag.diameter_m:g} m x {bag.length_m:g} m body holds "
                     f"{catalogue.body_volume(entry):.1f} m3, not the "
