@@ -158,7 +158,7 @@ def design_basis(scenario, weight_t: float | None = None) -> list[dict]:
              source(scenario, "gas.fill_rate_max_m3_s")),
     ]
     shown = {"lift.breakout_factor", "limits.pitch_deg", "hull.allowable_stress_MPa",
-             "gas.fill_rate_max_m3_s"}
+             "gas.fill_rate_max_m3_s", "lift.catalogue_bag"}  # the bag: its own row above
     for key, how in (scenario.defaulted or {}).items():
         if key not in shown:
             try:
