@@ -109,3 +109,12 @@ def test_a_packaged_catalogue_bag_is_not_called_the_users():
                         "lift": {"catalogue_bag": {"model": "open_parachute_20t"}}})
     src = _catalogue_rows(s)[0]["source"]
     assert "flexlift's catalogue" in src and "your catalogue file" not in src
+
+
+def test_a_bag_flexlift_chose_says_so():
+    from flexlift.scenario.basis import _catalogue_rows
+    from flexlift.scenario.schema import parse_scenario
+
+    s = parse_scenario({"based_on": "tanker", "defaulted": {"lift.catalogue_bag": "derived"},
+                        "lift": {"catalogue_bag": {"model": "open_parachute_20t"}}})
+    assert _catalogue_rows(s)[0]["note"].startswith("chosen by flexlift")

@@ -99,6 +99,9 @@ def _catalogue_rows(scenario) -> list[dict]:
             note = (f"kept as published: a {bag.diameter_m:g} m x {bag.length_m:g} m body holds "
                     f"{catalogue.body_volume(entry):.1f} m3, not the "
                     f"{catalogue.rated_volume(entry):.0f} m3 its {bag.lift_t:g} t needs")
+    if (scenario.defaulted or {}).get("lift.catalogue_bag") == "derived":
+        note = ("chosen by flexlift (no bag given): "
+                + POLICY["lift.catalogue_bag"][1] + (f"; {note}" if note else ""))
     dims = (f"{bag.type.replace('_', ' ')}, {bag.lift_t:g} t rated, {bag.diameter_m:g} m x "
             f"{bag.length_m:g} m, relief {_show(bag.relief_bar, 'bar')}, working pressure "
             f"{_show(bag.working_pressure_bar, 'bar')}, dump valve "
