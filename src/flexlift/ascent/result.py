@@ -325,19 +325,13 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
     if outcome.kind in ("incomplete", "not_achieved"):
         reasons["reached_target"] = outcome.cause
     warnings = slope_warnings(ds, sc.limits.slope_validity_deg)
-    if sc.limits.pitch_deg is None:  # the tilt criterion does not apply: said, not judged
-        del crit["pitch"]
-        warnings.append(NO_TILT)
+    if sc.limits.pitch_deg is None:  # the tilt criterion does not apply: the design basis
+        del crit["pitch"]             # and the particulars say so (not a warning of every run)
     ds.attrs.update(warnings=json.dumps(warnings),title=f"flexlift ascent of {sc.name}, {run.mode} control", scenario=sc.name,
                     scenario_checksum=sc.checksum(), control=run.mode, events=json.dumps(events),
                     criteria=json.dumps(crit), reasons=json.dumps(reasons),
                     outcome=json.dumps(outcome.as_dict()), headline=json.dumps(headline), error=error or "",
                     max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax)
-
-
-#: the run's note when limits.pitch_deg is null
-NO_TILT = ("no tilt criterion (limits.pitch_deg: null, a pipe's default): the pitch is not "
-           "judged; the bending utilisation governs")
 
 
 def utilisation_reason(ds, sc) -> str:
