@@ -14,7 +14,7 @@ from __future__ import annotations
 from functools import lru_cache
 
 from flexlift.scenario import catalogue
-from flexlift.scenario.defaults import POLICY, own_structure
+from flexlift.scenario.defaults import POLICY, own_structure, set_in
 
 __all__ = ["design_basis", "in_air_daf", "DAF_TABLE", "CONSEQUENCE_LIFT_POINT"]
 
@@ -47,16 +47,6 @@ def _value(model, dotted: str):
     return node
 
 
-def _given(model, dotted: str) -> bool:
-    node = model
-    *path, last = dotted.split(".")
-    for part in path:
-        if part not in node.model_fields_set:
-            return False
-        node = getattr(node, part)
-    return last in node.model_fields_set
-
-
 def source(scenario, dotted: str) -> str:
     """Where the value of key ``dotted`` comes from (module docstring)."""
     how = (scenario.defaulted or {}).get(dotted)
@@ -67,7 +57,7 @@ def source(scenario, dotted: str) -> str:
         return "paper" if same else "user"
     from flexlift.scenario.schema import Scenario
 
-    if _given(scenario, dotted) and _value(scenario, dotted) != _value(Scenario.model_construct(),
+    if set_in(scenario, dotted) and _value(scenario, dotted) != _value(Scenario.model_construct(),
                                                                       dotted):
         return "user"
     return "default"

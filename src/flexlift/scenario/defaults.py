@@ -196,7 +196,7 @@ def complete_own_structure(data: dict) -> dict:
     return out
 
 
-def _set_in(model, dotted: str) -> bool:
+def set_in(model, dotted: str) -> bool:
     """Whether the key ``dotted`` was given (set) in the validated ``model``."""
     node = model
     *path, last = dotted.split(".")
@@ -221,7 +221,7 @@ def missing_required(scenario) -> str | None:
         return None
     internal = scenario.lift.internal_bags
     for key, (policy, why) in POLICY.items():
-        if policy != "required" or any(_set_in(scenario, k) for k in key.split("|")):
+        if policy != "required" or any(set_in(scenario, k) for k in key.split("|")):
             continue
         if key in ("hull.frame_spacing_m", "hull.ballast_tank_frames") and not internal:
             continue
