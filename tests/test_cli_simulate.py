@@ -67,3 +67,11 @@ def test_bad_control_option(capsys):
         rc = e.code
     assert rc == 2
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_a_run_without_arrivals_says_so_not_none(capsys):
+    from flexlift.cli import main
+
+    main(["simulate", "--duration", "100", "--control", "coordinated"])
+    out = capsys.readouterr().out
+    assert "no bag arrived" in out and "None" not in out

@@ -53,8 +53,9 @@ def _main(args: argparse.Namespace) -> int:
         arr = [v for v in s["arrival_time_s"].values() if v is not None]
         sys.stdout.write(
             f"{s['control']} control: separation at {s['separation_time_s']} s, breakout complete at "
-            f"{s['breakout_time_s']} s, last arrival at {max(arr) if arr else None} s; "
-            f"max ascent velocity {s['max_ascent_velocity_ms']} m/s, max pitch {s['max_pitch_deg']} deg, "
+            f"{s['breakout_time_s']} s, "
+            + (f"last arrival at {max(arr)} s; " if arr else "no bag arrived; ")
+            + f"max ascent velocity {s['max_ascent_velocity_ms']} m/s, max pitch {s['max_pitch_deg']} deg, "
             f"max descent velocity {s['max_descent_velocity_ms']} m/s, "
             f"max bending moment {s['max_bending_moment_MNm']} MN m, gas {s['gas_total_free_air_m3']} m3 "
             f"free air in all ({s['gas_initial_free_air_m3']} initial fill + {s['gas_used_free_air_m3']} "
