@@ -52,8 +52,11 @@ def _main(args: argparse.Namespace) -> int:
         crit = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["criteria"].items())
         arr = [v for v in s["arrival_time_s"].values() if v is not None]
         sys.stdout.write(
-            f"{s['control']} control: separation at {s['separation_time_s']} s, breakout complete at "
-            f"{s['breakout_time_s']} s, "
+            f"{s['control']} control: "
+            + (f"separation at {s['separation_time_s']} s, " if s["separation_time_s"] is not None
+               else "no separation, ")
+            + (f"breakout complete at {s['breakout_time_s']} s, "
+               if s["breakout_time_s"] is not None else "breakout not complete, ")
             + (f"last arrival at {max(arr)} s; " if arr else "no bag arrived; ")
             + f"max ascent velocity {s['max_ascent_velocity_ms']} m/s, max pitch {s['max_pitch_deg']} deg, "
             f"max descent velocity {s['max_descent_velocity_ms']} m/s, "
