@@ -37,8 +37,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 #: the tests each mutant runs, fastest to fail first (pytest -x stops at the first failure)
 TESTS = ("tests/test_physics.py", "tests/test_controller.py", "tests/test_control_laws.py",
-         "tests/test_plant_laws.py", "tests/test_results.py", "tests/test_simulate.py",
-         "tests/test_staged_lift.py")
+         "tests/test_plant_laws.py", "tests/test_supply.py", "tests/test_results.py",
+         "tests/test_simulate.py", "tests/test_staged_lift.py")
 
 
 @dataclass(frozen=True)
@@ -98,6 +98,10 @@ MUTATIONS = (
     M("bag-drag-coefficient", "ascent/plant.py",
       "rho, hy.bag_drag_coefficient, 1.0)", "rho, hy.drag_coefficient, 1.0)",
       "bag drag with the hull's C_D (1.2) instead of C_D,bag (1.0)"),
+    M("supply-derating", "ascent/kernel.py",
+      "demand += state.fill[i] * switches.supply[i] * p / bags.p_atm",
+      "demand += state.fill[i] * switches.supply[i]",
+      "the compressor's share not derated by depth (free air counted at the bag's pressure)"),
     M("added-mass-plant", "ascent/plant.py",
       "mass_line = hydro.moving_water_per_length(",
       "mass_line = 0.0 * hydro.moving_water_per_length(",

@@ -137,7 +137,8 @@ def _separations(scenario, plant):
     V_pull = bag_pulls(scenario, plant)
     held = np.maximum(V_pull - scenario.control.volume_deadband_m3, 0.0)
     start = start_times(scenario, plant.names, plant.x_point, plant.external)[ext]
-    q_in, T_b = scenario.gas.fill_rate_max_m3_s, scenario.seabed.breakout_time_s
+    q_in = fill_rate_on_seabed(scenario, int(plant.external.sum()))
+    T_b = scenario.seabed.breakout_time_s
     times, fills = [], []
     for k in range(plant.seabed.ng):
         mine = plant.bags.group[ext] == k
@@ -256,19 +257,36 @@ def purge_check(scenario, plant) -> Check:
                  "there (larger purge valves, gas.purge_rate_max_m3_s, would keep the speed)")
 
 
+def fill_rate_on_seabed(scenario, n_filling: int) -> float:
+    """Each of ``n_filling`` bags' fill rate at the seabed [m^3/s at local pressure]: its own
+    rate, or a compressor's share of free air derated by depth (docs/theory/gas.md#supply)."""
+    q = scenario.gas.fill_rate_max_m3_s
+    fad = scenario.gas.supply_free_air_m3_min
+    if fad is None:
+        return q
+    env = scenario.environment
+    p = env.atmospheric_pressure_Pa + env.seawater_density_kg_m3 * env.gravity_m_s2 * (
+        env.water_depth_m)
+    return min(q, fad / 60.0 * env.atmospheric_pressure_Pa / p / max(n_filling, 1))
+
+
 def fill_check(scenario, plant) -> Check:
     """How long the supply takes to fill the breakout pull."""
     n_ext = int(plant.external.sum())
     if not n_ext:
         return Check("fill", True, "no external bags: nothing is filled during the run")
     pull = breakout_pull(scenario, float(plant.seabed.H0.sum())) / plant.bags.rho_g  # [m^3] at local pressure
-    t_fill = pull / max(n_ext * scenario.gas.fill_rate_max_m3_s, 1e-12)
+    q = fill_rate_on_seabed(scenario, n_ext)
+    t_fill = pull / max(n_ext * q, 1e-12)
     V_n = plant.neutral_volume[plant.external]
-    t_first = float(V_n.max()) / scenario.gas.fill_rate_max_m3_s
+    t_first = float(V_n.max()) / q
     ok = t_fill < 0.1 * scenario.simulation.run_length_s
-    msg = (f"the supply ({scenario.gas.fill_rate_max_m3_s:g} m3/s per bag) fills the "
-           f"{pull:.0f} m3 pull in {t_fill:.0f} s; the initial fill to the neutral volume took "
-           f"{t_first / 60:.0f} min per bag")
+    fad = scenario.gas.supply_free_air_m3_min
+    supply = (f"the supply ({q:g} m3/s per bag)" if fad is None else
+              f"the compressor ({fad:g} m3/min of free air: {q:.3g} m3/s per bag at the seabed)")
+    msg = (f"{supply} fills the {pull:.0f} m3 pull in {t_fill:.0f} s; the initial fill to the "
+           f"neutral volume took {t_first / 60:.0f} min per bag")
     if not ok:
-        msg += "; raise gas.fill_rate_max_m3_s"
+        msg += ("; raise gas.fill_rate_max_m3_s" if fad is None
+                else "; a larger compressor (gas.supply_free_air_m3_min), or more of them")
     return Check("fill", ok, msg)

@@ -83,7 +83,8 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
         nb=ne, shape=shape.copy(), slope=np.tile(pitch_row, (ne, 1)), force=force.copy(),
         group=np.arange(ne, dtype=np.int64), capacity=pb.capacity[ext].copy(),
         relief=np.zeros(ne), top_offset=pb.top_offset[ext].copy(), drag=pb.drag[ext].copy(),
-        purge_max=pb.purge_max, RT=pb.RT, p_atm=pb.p_atm, rho_g=pb.rho_g,
+        purge_max=pb.purge_max, supply_free_air=pb.supply_free_air, RT=pb.RT, p_atm=pb.p_atm,
+        rho_g=pb.rho_g,
         water_depth=pb.water_depth, corr_shape=eye, corr_weight=-W * D,
         slope_shape=np.zeros((ne, ne)), slope_weight=np.zeros(ne),
         gen_strip=eye * (D * trib)[:, None], gen_bag=eye * D[:, None])

@@ -339,7 +339,9 @@ def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
         top_offset=hull.depth + np.where(external, hydro.sphere_diameter(capacity), 0.0),
         drag=np.where(external, hydro.drag_coefficient(
             rho, hy.bag_drag_coefficient, 1.0) * hydro.sphere_frontal_area(capacity), 0.0),
-        purge_max=scenario.gas.purge_rate_max_m3_s, **gas_constants(scenario),
+        purge_max=scenario.gas.purge_rate_max_m3_s,
+        supply_free_air=(scenario.gas.supply_free_air_m3_min or 0.0) / 60.0,
+        **gas_constants(scenario),
         corr_shape=cs, corr_weight=cw, slope_shape=ss, slope_weight=sw,
         gen_strip=np.ascontiguousarray(strip_e), gen_bag=np.ascontiguousarray(bag_e))
 

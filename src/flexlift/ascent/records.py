@@ -94,6 +94,8 @@ class Bags(NamedTuple):
     top_offset (nb,)          m           height of a bag's top above the hull bottom
     drag (nb,)                kg/m        bag drag coefficient 1/2 rho C_D,bag A
     purge_max                 m^3/s       the purge valves' largest flow Q_out,max
+    supply_free_air           m^3/s       a compressor's free-air delivery shared by the bags
+                                          (0: no compressor limit; the commanded fill at depth)
     RT                        J/mol       R T of the gas at the sea's temperature
     p_atm                     Pa          atmospheric pressure
     rho_g                     N/m^3       seawater density times gravity
@@ -126,6 +128,7 @@ class Bags(NamedTuple):
     top_offset: np.ndarray
     drag: np.ndarray
     purge_max: float
+    supply_free_air: float
     RT: float
     p_atm: float
     rho_g: float

@@ -147,8 +147,15 @@ def design_basis(scenario, weight_t: float | None = None) -> list[dict]:
              source(scenario, "limits.arrival_tolerance_m")),
         _row("allowable hull girder stress", f"{scenario.hull.allowable_stress_MPa:g} MPa",
              source(scenario, "hull.allowable_stress_MPa")),
-        _row("gas supply per bag", f"{scenario.gas.fill_rate_max_m3_s:g} m3/s at the bag's depth",
-             source(scenario, "gas.fill_rate_max_m3_s")),
+        (_row("gas supply per bag", f"{scenario.gas.fill_rate_max_m3_s:g} m3/s at the bag's depth",
+              source(scenario, "gas.fill_rate_max_m3_s"),
+              "no compressor stated (gas.supply_free_air_m3_min): at 350 m that is ~18 m3/s "
+              "of free air per bag")
+         if scenario.gas.supply_free_air_m3_min is None else
+         _row("gas supply (compressor)",
+              f"{scenario.gas.supply_free_air_m3_min:g} m3/min of free air, shared; at the bag "
+              "x p_atm / p", source(scenario, "gas.supply_free_air_m3_min"),
+              f"each bag at most {scenario.gas.fill_rate_max_m3_s:g} m3/s at its depth")),
     ]
     shown = {"lift.breakout_factor", "limits.pitch_deg", "hull.allowable_stress_MPa",
              "gas.fill_rate_max_m3_s", "lift.catalogue_bag"}  # the bag: its own row above

@@ -270,6 +270,10 @@ class Gas(_Section):
     relief_pressure_bar: real(0.001, 10) = 0.1  # internal bags' over-pressure relief setting
     fill_rate_max_m3_s: real(1e-4, 100) = 0.5  # at the bag's local pressure
     purge_rate_max_m3_s: real(1e-4, 100) = 2.0  # at local pressure, valve fully open, bag full
+    # a compressor's free-air delivery shared by every bag it feeds [m^3/min of free air]: at
+    # the bag it gives FAD p_atm / p, split over the bags filling; none: each bag fills at
+    # fill_rate_max_m3_s at its own depth (the paper's assumption)
+    supply_free_air_m3_min: real(0.01, 100_000) | None = None
 
 
 # --------------------------------------------------------------------------- seabed
