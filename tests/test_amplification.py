@@ -101,3 +101,21 @@ def test_the_peak_sling_force_beside_its_design_load(tanker, coordinated, coordi
     assert s["max_sling_over_design_load"] == pytest.approx(ratios[best], abs=1e-3)
     table = next(t for t in coordinated.tables if t.title.startswith("Dynamic amplification"))
     assert [r[2] for r in table.rows][:2] == [s["daf_pull_bag"], s["daf_ascent_bag"]]
+
+
+def test_the_phases_split_at_each_bags_separation():
+    """Up to and including the separation is the pull phase, after it the ascent; a bag whose
+    own separation event names it (the paper's plant) splits at its own time; a bag that never
+    separated has only a pull phase."""
+    from flexlift.ascent.amplification import phase_peaks, separation_times
+
+    events = [{"kind": "separation", "bag": None, "time_s": 2.0},
+              {"kind": "separation", "bag": "b", "time_s": 3.0}]
+    t_sep = separation_times(events, ["a", "b"])
+    assert t_sep.tolist() == [2.0, 3.0]
+    t = np.arange(6.0)
+    sling = np.array([[1, 1], [2, 2], [5, 5], [3, 7], [4, 6], [1, 1]], dtype=float)
+    pull, asc = phase_peaks(t, sling, t_sep)
+    assert pull.tolist() == [5.0, 7.0] and asc.tolist() == [4.0, 6.0]
+    pull, asc = phase_peaks(t, sling, np.array([np.nan, np.nan]))
+    assert pull.tolist() == [5.0, 7.0] and np.isnan(asc).all()
