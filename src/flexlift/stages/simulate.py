@@ -143,8 +143,12 @@ def amplification(result, scenario, mode: str) -> tuple[dict, Table, Table]:
                     "case's", out["daf_bending"], None],
                    ["peak sling force over its sling design load",
                     out["max_sling_over_design_load"], out["max_sling_over_design_load_bag"]]],
-                  note="The static forces are the closed design cases' (the loads stage); the "
-                       "design basis's in-air DAF is for comparison only.")
+                  note="The static forces are the closed design cases' (the loads stage): the "
+                       "holding share (neutral buoyancy) plus the planned breakout pull before "
+                       "the separation, the holding share after it; a bag still carries its "
+                       "pull just after the separation until its controller purges it. Every "
+                       f"bag's values: tables/{per_bag.csv}. The design basis's in-air DAF is "
+                       "for comparison only.")
     return out, per_bag, small
 
 
