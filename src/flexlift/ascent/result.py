@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from flexlift import constants as C
+from flexlift.ascent.amplification import amplification, largest
 from flexlift.ascent.outcome import judge
 from flexlift.ascent.state import (
     EV_ARRIVAL,
@@ -53,6 +54,15 @@ HULL_VARS = {
     "holding_force": ("N", "suction holding force H"),
     "uplift": ("N", "net uplift U = sum of bag lift - wet weight"),
     "contact_force": ("N", "seabed contact force"),
+}
+#: the per-bag dynamic amplification variables (:mod:`flexlift.ascent.amplification`)
+DAF_VARS = {
+    "static_force_hold": "static force in the holding case: neutral buoyancy",
+    "static_force_pull": "static force in the pull phase: neutral buoyancy plus planned pull",
+    "peak_sling_force_pull": "peak sling force up to the separation",
+    "peak_sling_force_ascent": "peak sling force after the separation",
+    "daf_pull": "dynamic amplification before the separation: peak over static pull-phase force",
+    "daf_ascent": "dynamic amplification after the separation: peak over neutral buoyancy",
 }
 CRITERIA = ("ascent_velocity", "descent_velocity", "pitch", "reached_target", "no_surface_breach",
             "no_resettle", "bending_utilisation")
@@ -123,7 +133,8 @@ class Result:
                 "max_utilisation", "max_slope_deg", "max_slope_x_m", "max_slope_time_s",
                 "gas_used_local_m3", "gas_used_free_air_m3",
                 "gas_initial_free_air_m3", "gas_total_free_air_m3", "gas_vented_free_air_m3",
-                "gas_purged_free_air_m3", "supply_bag_hours", "end_time_s")
+                "gas_purged_free_air_m3", "supply_bag_hours", "daf_pull", "daf_pull_bag",
+                "daf_ascent", "daf_ascent_bag", "end_time_s")
         out = {"control": self.control, "outcome": self.outcome.get("kind"),
                "outcome_cause": self.outcome.get("cause"),
                "needs_more_s": self.outcome.get("needs_s"),
@@ -242,8 +253,12 @@ def build_result(run, error: str | None) -> Result:
             "units": "rad", "long_name": "envelope: largest slope of the structure (retained modes)"})
         data["slope_largest"] = (("time_strength",), np.abs(bed["slope"]).max(1), {
             "units": "rad", "long_name": "largest slope along the structure"})
-    ds = xr.Dataset(data, coords=coords)
     events = event_list(run)
+    daf = amplification(xr.Dataset(data, coords=coords), events, run.scenario, P, run.mode)
+    for name, long in DAF_VARS.items():
+        data[name] = (("bag",), daf[name], {"units": "1" if name.startswith("daf") else "N",
+                                             "long_name": long})
+    ds = xr.Dataset(data, coords=coords)
     _attributes(ds, run, events, t, Mmax, Vmax, error)
     return Result(ds)
 
@@ -316,6 +331,7 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
         "max_stress_MPa": _r(float(ds["stress_max"].max()) / 1e6, 2) if "stress_max" in ds else None,
         "max_utilisation": _r(float(ds["utilisation_max"].max()), 3) if "utilisation_max" in ds else None,
         **steepest(ds),
+        **daf_headline(ds),
         "end_time_s": _r(float(t[-1]) if t.size else 0.0, 1),
     }
     reasons = explain(run, events, crit, vmax, vdown, pmax, error)
@@ -347,6 +363,19 @@ def utilisation_reason(ds, sc) -> str:
             f"{M / 1e6:.1f} MN m, Z = {Z[j]:.3g} m3): utilisation {float(u[k, j]):.2f} against "
             f"the allowable {sc.hull.allowable_stress_MPa:g} MPa (hull.allowable_stress_MPa); "
             "a stronger section, or lift points closer to where the weight is")
+
+
+def daf_headline(ds) -> dict:
+    """Headline keys of the sling forces' dynamic amplification: the largest of each phase
+    among the external bags (all bags when none is) and which bag."""
+    names = ds.bag.values
+    ext = ds["bag_kind"].values == "external"
+    among = ext if ext.any() else np.ones(names.size, bool)
+    out = {}
+    for phase in ("pull", "ascent"):
+        v, b = largest(ds[f"daf_{phase}"].values, names, among)
+        out[f"daf_{phase}"], out[f"daf_{phase}_bag"] = _r(v, 3), b
+    return out
 
 
 def steepest(ds) -> dict:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexlift import constants as C
 from flexlift.errors import SimulationError
 from flexlift.output.pointtables import event_rows, point_tables
 from flexlift.output.stage import Figure, StageOutput, Table
@@ -68,6 +69,93 @@ def _write(result, out: Path, mode: str, seabed: dict | None = None,
     return figs
 
 
+def static_peak_moment(scenario) -> tuple[float, str]:
+    """The governing static design case's peak |M| [N m] (the largest of the loads stage's
+    closed design cases, :func:`flexlift.stages.loads.design`) and its name."""
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.stages.loads import design
+    from flexlift.structure.hull import hull_from_scenario
+
+    hull = hull_from_scenario(scenario)
+    cases = design(scenario, hull, plan_lift(scenario, hull))
+    c = max(cases, key=lambda c: float(np.abs(c.strength.M).max()))
+    return float(np.abs(c.strength.M).max()), c.name
+
+
+def sling_design_loads(scenario) -> dict:
+    """Each bag's sling design load [N]: its full true lift, capacity factor x max(rated,
+    modelled lift), as the design basis states it (internal bags have no sling: absent)."""
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.structure.hull import hull_from_scenario
+
+    plan = plan_lift(scenario, hull_from_scenario(scenario))
+    bag = scenario.lift.catalogue_bag
+    rated = bag.lift_t * C.TONNE * plan.gravity
+    return {b.name: bag.capacity_factor * max(rated, b.lift) for b in plan.external}
+
+
+def amplification(result, scenario, mode: str) -> tuple[dict, Table, Table]:
+    """The dynamic amplification of a run beside the static design cases: the summary keys
+    (``daf_bending``, ``max_sling_over_design_load`` and its bag), the per-bag table (CSV) and
+    the report's small table."""
+    ds = result.dataset
+    h = result.headline
+    design_load = sling_design_loads(scenario)
+    names = [str(b) for b in ds.bag.values]
+    peak = np.fmax(ds["peak_sling_force_pull"].values, ds["peak_sling_force_ascent"].values)
+    rows, ratios = [], {}
+    for i, n in enumerate(names):
+        dl = design_load.get(n)
+        if dl:
+            ratios[n] = float(peak[i]) / dl
+        rows.append([n, str(ds["bag_kind"].values[i]),
+                     _r(ds["static_force_pull"].values[i] / 1e6, 4),
+                     _r(ds["peak_sling_force_pull"].values[i] / 1e6, 4),
+                     _r(ds["daf_pull"].values[i], 4),
+                     _r(ds["static_force_hold"].values[i] / 1e6, 4),
+                     _r(ds["peak_sling_force_ascent"].values[i] / 1e6, 4),
+                     _r(ds["daf_ascent"].values[i], 4),
+                     _r(dl / 1e6, 4) if dl else None,
+                     _r(ratios.get(n), 4)])
+    per_bag = Table(f"Dynamic amplification of the sling forces by bag ({mode})",
+                    ["bag", "kind", "static pull-phase force [MN]", "peak sling force before "
+                     "separation [MN]", "DAF before separation", "static holding force [MN]",
+                     "peak sling force after separation [MN]", "DAF after separation",
+                     "sling design load [MN]", "peak over design load"], rows,
+                    csv=f"simulate_{mode}_amplification.csv")
+    out = {"daf_bending": None, "daf_bending_case": None,
+           "max_sling_over_design_load": None, "max_sling_over_design_load_bag": None}
+    M_dyn = h.get("max_bending_moment_MNm")
+    if M_dyn is not None:
+        M_st, case = static_peak_moment(scenario)
+        out["daf_bending"] = _r(M_dyn * 1e6 / M_st, 3) if M_st > 0 else None
+        out["daf_bending_case"] = case
+    if ratios:
+        b = max(ratios, key=ratios.get)
+        out["max_sling_over_design_load"] = _r(ratios[b], 3)
+        out["max_sling_over_design_load_bag"] = b
+    small = Table(f"Dynamic amplification from the run ({mode})", ["quantity", "value", "bag"],
+                  [["sling force before separation: peak over holding share plus pull",
+                    h.get("daf_pull"), h.get("daf_pull_bag")],
+                   ["sling force after separation: peak over holding share",
+                    h.get("daf_ascent"), h.get("daf_ascent_bag")],
+                   [f"bending moment: peak over the static {out['daf_bending_case'] or '–'} "
+                    "case's", out["daf_bending"], None],
+                   ["peak sling force over its sling design load",
+                    out["max_sling_over_design_load"], out["max_sling_over_design_load_bag"]]],
+                  note="The static forces are the closed design cases' (the loads stage): the "
+                       "holding share (neutral buoyancy) plus the planned breakout pull before "
+                       "the separation, the holding share after it; a bag still carries its "
+                       "pull just after the separation until its controller purges it. Every "
+                       f"bag's values: tables/{per_bag.csv}. The design basis's in-air DAF is "
+                       "for comparison only.")
+    return out, per_bag, small
+
+
+def _r(v, nd):
+    return None if v is None or not np.isfinite(v) else round(float(v), nd)
+
+
 def gas_budget_rows(s: dict) -> list[list]:
     """The whole gas budget of a run summary, free air at the surface [m^3], row by row."""
     return [["initial fill to the neutral volumes, before the run [m3]", s["gas_initial_free_air_m3"]],
@@ -115,15 +203,17 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
             raise
     long_ = scenario.pipe is not None or scenario.control.sequence is not None
     per_point, per_bag = point_tables(result, mode)
+    daf, daf_bags, daf_small = amplification(result, scenario, mode)
     figures = (_write(result, Path(out), mode, static_view(scenario) if long_ else None,
-                      (per_point, per_bag))
+                      (per_point, per_bag, daf_bags))
                if out is not None else [])
     summary = result.summary()
+    summary.update(daf)
     summary["conclusion"] = _conclusion(mode, result.outcome)
     warnings += result.warnings
     tables = [Table(f"Events of the ascent ({mode})", ["time [s]", "event", "bag", "detail"],
                     event_rows(result)),
-              gas_table(summary, mode), per_point, per_bag]
+              gas_table(summary, mode), per_point, per_bag, daf_small]
     if summary["max_stress_MPa"] is not None:
         tables.append(stress_table(result, scenario, mode))
     return StageOutput(name=f"simulate:{mode}", summary=summary, figures=figures, tables=tables,
