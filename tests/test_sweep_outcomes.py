@@ -171,3 +171,16 @@ def test_the_cli_stops_with_exit_1_the_traceback_and_the_rerun_command(tmp_path,
     assert len(list((out / "cases").glob("case_*.json"))) == bad
     monkeypatch.setattr(plants, "plant_for", real)
     assert main(["sweep", str(spec), "--workers", "1", "--out", str(out), "--quiet"]) == 0
+
+
+def test_a_headline_that_names_a_bag_is_not_aggregated_as_a_number():
+    """The run's headline may name which bag a peak belongs to (daf_pull_bag): the sweep's
+    aggregation takes only the numbers, even when a failed case has none of them."""
+    import numpy as np
+
+    from flexlift.sweep.aggregate import headline_array, headline_names
+
+    records = {0: {"status": "completed", "results": {"m": {"headline": {"a": 1.0, "b": "bag_1"}}}},
+               1: {"status": "completed", "results": {"m": {"headline": {"a": None, "b": None}}}}}
+    assert headline_names(records, "m") == ["a"]
+    assert np.isnan(headline_array(records, "m", "a")[1])

@@ -173,10 +173,16 @@ def sensitivity(records: dict, modes, keys) -> dict:
 
 
 def headline_names(records: dict, mode: str) -> list[str]:
+    """The headline numbers of the cases run in this mode (entries that are not numbers,
+    such as which bag a peak belongs to, are not aggregated)."""
     names: dict[str, None] = {}
+    text: set[str] = set()
     for r in ran(records, mode):
-        names.update(dict.fromkeys(r["results"][mode].get("headline", {})))
-    return list(names)
+        for k, v in r["results"][mode].get("headline", {}).items():
+            names[k] = None
+            if not (v is None or isinstance(v, int | float) and not isinstance(v, bool)):
+                text.add(k)
+    return [k for k in names if k not in text]
 
 
 def headline_array(records: dict, mode: str, name: str) -> np.ndarray:
