@@ -116,3 +116,18 @@ def test_the_library_does_not_print():
             if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "print":
                 offenders.append(str(p.relative_to(SRC)))
     assert not offenders, offenders
+
+
+def test_the_packages_docstring_lists_the_layers_this_test_enforces():
+    """src/flexlift/__init__.py names the floors in order; every layer's allowed imports are
+    floors below it in that order, and every layer is named."""
+    import re
+
+    import flexlift
+
+    m = re.search(r"layers: (.*?)\n\n", flexlift.__doc__, flags=re.S)
+    order = [w.strip() for w in m.group(1).replace("\n", " ").split(",")]
+    assert set(order) == set(ALLOWED), (order, sorted(ALLOWED))
+    for layer, allowed in ALLOWED.items():
+        below = set(order[: order.index(layer)])
+        assert allowed <= below, (layer, sorted(allowed - below))

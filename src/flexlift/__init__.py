@@ -5,6 +5,16 @@ The analysis flows one way, one stage per module:
     scenario -> hull -> beam -> modes -> liftplan/loads -> statespace -> reduce
              -> fuzzy/control + bags/seabed/hydro -> simulate -> results -> plots/report
 
+The packages are floors; each imports only from the floors below it (tests/test_layout.py
+holds the same list and checks every import against it):
+
+    layers: plumbing, physics, scenario, structure, loads, dynamics, fuzzy, control, ascent,
+            output, stages, sweep, cli
+
+``plumbing`` (files written atomically, files read within bounds, the output lock and the
+marker) is the bottom floor every layer may use; the top-level helpers (``constants``,
+``errors``, ``_jit``, ``_struct``, ``_threads``) likewise.
+
 Units are SI throughout (m, s, kg, N, Pa, rad); tonnes, degrees and bar appear only in
 scenario files and reports.
 """
