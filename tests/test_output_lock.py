@@ -266,3 +266,29 @@ def test_a_fifo_planted_as_a_case_record_never_blocks_a_resume(tmp_path):
     assert _read_json(tmp_path / "real.json") == {"case": 1}
     (tmp_path / "link.json").symlink_to(tmp_path / "real.json")
     assert _read_json(tmp_path / "link.json") is None
+
+
+def test_a_file_planted_as_a_sweeps_journal_is_never_written_or_removed(tmp_path):
+    """A hard link to a user's file at the journal's name: the rerun is refused, the file
+    keeps its content and its name."""
+    out = tmp_path / "out"
+    with incremental_folder(out, "sweep", "id") as inc:
+        write_text(out / "a.txt", "ours")
+        inc.finish()
+    notes = tmp_path / "notes.txt"
+    notes.write_text("precious")
+    os.link(notes, out / JOURNAL)
+    with pytest.raises(OutputError, match="not a flexlift journal"), \
+            incremental_folder(out, "sweep", "id"):
+        pass
+    assert notes.read_text() == "precious" and (out / JOURNAL).exists()
+
+
+def test_a_journal_replaced_during_the_run_is_not_appended_to(tmp_path):
+    other = tmp_path / "elsewhere.txt"
+    other.write_text("the user's")
+    with pytest.raises(OutputError), output_folder(tmp_path / "out", "modes") as tmp:
+        os.unlink(tmp / JOURNAL)
+        os.link(other, tmp / JOURNAL)  # another file at the journal's name
+        write_text(tmp / "a.txt", "x")
+    assert other.read_text() == "the user's"

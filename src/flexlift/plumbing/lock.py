@@ -61,6 +61,12 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def _same(a: os.stat_result, b: os.stat_result) -> bool:
+    """Whether two stat results are of one file (device and inode): a name is unlinked only
+    while it still refers to the file this run created or examined."""
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
+
+
 def _create(path: Path, mode: int) -> int | None:
     """A new lock file at ``path``, held and written; None when something is already there."""
     flags = os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
@@ -80,7 +86,7 @@ def _create(path: Path, mode: int) -> int | None:
             raise BlockingIOError(errno.EWOULDBLOCK, "the new lock file stayed locked")
     except BaseException:
         with contextlib.suppress(OSError):
-            if os.fstat(fd).st_ino == os.lstat(path).st_ino:
+            if _same(os.fstat(fd), os.lstat(path)):
                 os.unlink(path)  # created just now by this run
         os.close(fd)
         raise
@@ -147,7 +153,7 @@ def _examine(path: Path, refuse: Refuse) -> bool:
             raise refuse(f"its lock file {shown} names pid {pid}, which is running; if that is "
                          f"not a flexlift run writing this folder, remove {shown} and run again")
         # a stale lock of a killed run: ours to replace, if the name still refers to it
-        if os.lstat(path).st_ino != st.st_ino:
+        if not _same(os.lstat(path), st):
             return False
         os.unlink(path)
         return True
@@ -181,6 +187,6 @@ def held_lock(final: Path, refuse: Refuse, mode: int = 0o644) -> Iterator[Path]:
         yield path
     finally:
         with contextlib.suppress(OSError):
-            if os.lstat(path).st_ino == os.fstat(fd).st_ino:
+            if _same(os.lstat(path), os.fstat(fd)):
                 os.unlink(path)  # the file this run created, still ours
         os.close(fd)

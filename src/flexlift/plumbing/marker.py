@@ -84,29 +84,47 @@ def marker(run_id: str, command: str, complete: bool, files: Iterable[str] = ())
 
 class Journal:
     """The journal of the folder ``root``: names claimed (relative POSIX paths) before they are
-    created. :meth:`start` creates it new; :meth:`entries` reads one a killed run left."""
+    created. :meth:`start` creates it new; :meth:`entries` reads one a killed run left.
 
-    def __init__(self, root: Path):
+    ``ident`` is the (device, inode) of the file :meth:`start` created: every append checks
+    that the name still refers to it (opened without following a link), so a file planted or
+    linked in its place is never written; a journal adopted by another process
+    (:func:`adopted`) carries the same identity."""
+
+    def __init__(self, root: Path, ident: tuple[int, int] | None = None):
         self.root = Path(root)
         self.path = self.root / JOURNAL
+        self.ident = ident
 
     def start(self) -> Journal:
-        """Create the journal anew (an old one of ours is replaced; it was read before)."""
+        """Create the journal anew. One left by an earlier run of this command (read before)
+        is replaced only when it is provably flexlift's: a regular file with one link, owned
+        by this user; anything else there raises FileExistsError (the folder is refused)."""
         with contextlib.suppress(FileNotFoundError):
             st = os.lstat(self.path)
-            if not stat.S_ISREG(st.st_mode):
-                raise FileExistsError(f"{self.path} is not a flexlift journal")
-            os.unlink(self.path)  # listed by the marker beside it: ours
-        os.close(os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW, 0o644))
+            if not (stat.S_ISREG(st.st_mode) and st.st_nlink == 1
+                    and st.st_uid == os.geteuid()):
+                raise FileExistsError(f"{self.path} is not a flexlift journal (a link, another "
+                                      "file, or another user's)")
+            os.unlink(self.path)
+        fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW, 0o644)
+        st = os.fstat(fd)
+        os.close(fd)
+        self.ident = (st.st_dev, st.st_ino)
         return self
 
     def claim(self, *relpaths: str) -> None:
-        """Append ``relpaths`` before they are created (one write: whole lines or none)."""
+        """Append ``relpaths`` before they are created (one write: whole lines or none), to
+        the file :meth:`start` created and to nothing else."""
         if not relpaths:
             return
         line = "".join(json.dumps(r) + "\n" for r in relpaths).encode("utf-8")
         fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | _NOFOLLOW)
         try:
+            st = os.fstat(fd)
+            if (st.st_dev, st.st_ino) != self.ident or not stat.S_ISREG(st.st_mode):
+                raise FileExistsError(f"{self.path} was replaced during the run; nothing "
+                                      "written to it")
             os.write(fd, line)
         finally:
             os.close(fd)
@@ -125,8 +143,11 @@ class Journal:
         return out
 
     def remove(self) -> None:
+        """Remove the journal when it is provably flexlift's (a regular file with one link:
+        never a link, nor a name of another file)."""
         with contextlib.suppress(FileNotFoundError):
-            if stat.S_ISREG(os.lstat(self.path).st_mode):
+            st = os.lstat(self.path)
+            if stat.S_ISREG(st.st_mode) and st.st_nlink == 1:
                 os.unlink(self.path)
 
 
@@ -151,22 +172,24 @@ def journaled(root: Path) -> Iterator[Journal]:
         _ACTIVE.pop(journal.root, None)
 
 
-def active_roots() -> tuple[str, ...]:
-    """The folders this process is writing now (to hand to a process that writes for it)."""
-    return tuple(str(r) for r in _ACTIVE)
+def active_roots() -> tuple[tuple[str, tuple[int, int] | None], ...]:
+    """The folders this process is writing now, each with its journal's identity (to hand to
+    a process that writes for it)."""
+    return tuple((str(r), j.ident) for r, j in _ACTIVE.items())
 
 
 @contextlib.contextmanager
-def adopted(roots: tuple[str, ...]) -> Iterator[None]:
+def adopted(roots) -> Iterator[None]:
     """In a helper process (e.g. a figure process started before the run opened its folder):
-    journal into the folders ``roots`` of the process it writes for, while the block runs."""
-    added = [Path(r) for r in roots if Path(r) not in _ACTIVE]
-    for r in added:
-        _ACTIVE[r] = Journal(r)
+    journal into the folders ``roots`` (:func:`active_roots`) of the process it writes for,
+    while the block runs."""
+    added = [(Path(r), ident) for r, ident in roots if Path(r) not in _ACTIVE]
+    for r, ident in added:
+        _ACTIVE[r] = Journal(r, tuple(ident) if ident else None)
     try:
         yield
     finally:
-        for r in added:
+        for r, _ in added:
             _ACTIVE.pop(r, None)
 
 
