@@ -182,12 +182,7 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
     required = lift.breakout_factor * wet * (lift.weight_contingency or 1.0)
     cat = lift.catalogue_bag.lift_t * C.TONNE * g
     n, per_t = bag_count(required / (C.TONNE * g), lift.catalogue_bag.lift_t)
-    # the schema's cost check estimated the automatic layout's count; here it is exact
-    too_large = refusal(estimate(scenario, bags=n)) if lift.bags is None else None
-    if too_large is not None:
-        raise InputError("lift.catalogue_bag.lift_t", lift.catalogue_bag.lift_t,
-                         f"the plan would need {n:,} bags of it for {required / (C.TONNE * g):,.0f} t: "
-                         f"{too_large}; choose a larger catalogue bag")
+    _refuse_too_many(scenario, n, required / (C.TONNE * g))
     if lift.bag_lift_t is not None:
         per_t = lift.bag_lift_t
     per = per_t * C.TONNE * g
@@ -198,18 +193,7 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
         return Bag(name, kind, float(x), span, node, float(lift_force),
                    factor * lift_force / (rho * g))
 
-    if lift.bags is not None:
-        bags, layout = _explicit_bags(lift.bags, hull, per, g, make), "explicit"
-    else:
-        n_int = min(lift.internal_bags, n)
-        layout = lift.layout
-        snap = layout == "mode_nodes"  # the paper rounds the tanks to the element grid
-        internal = _tank_layout(scenario, hull, n_int, n - n_int, per, make, snap)
-        if layout == "mode_nodes":
-            external = _mode_layout(lift, modes, hull, n - n_int, per, make)
-        else:
-            external = _balanced_layout(scenario, hull, n - n_int, per, internal, make)
-        bags = external + internal
+    bags, layout = _laid_out(scenario, hull, modes, n, per, g, make)
     plan = LiftPlan(dry_weight=dry, wet_weight=wet, breakout_factor=lift.breakout_factor,
                     required_lift=required, catalogue_lift=cat, bag_lift=per, bags=tuple(bags),
                     gravity=g, layout=layout, seawater_density=rho,
@@ -223,6 +207,33 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
             "raise bag_lift_t")
         log.warning(warnings[-1])
     return replace(plan, warnings=tuple(warnings))
+
+
+def _refuse_too_many(scenario, n: int, required_t: float) -> None:
+    """InputError when the automatic layout's ``n`` bags are beyond the cost model's limits
+    (the schema's check estimated the count; here it is exact)."""
+    lift = scenario.lift
+    too_large = refusal(estimate(scenario, bags=n)) if lift.bags is None else None
+    if too_large is not None:
+        raise InputError("lift.catalogue_bag.lift_t", lift.catalogue_bag.lift_t,
+                         f"the plan would need {n:,} bags of it for {required_t:,.0f} t: "
+                         f"{too_large}; choose a larger catalogue bag")
+
+
+def _laid_out(scenario, hull: Hull, modes, n: int, per: float, g: float, make):
+    """(the bags, the layout's name): the scenario's own list, or ``n`` bags of ``per`` [N]
+    laid out by its rule (internal bags in the tanks, external bags by layout)."""
+    lift = scenario.lift
+    if lift.bags is not None:
+        return _explicit_bags(lift.bags, hull, per, g, make), "explicit"
+    n_int = min(lift.internal_bags, n)
+    snap = lift.layout == "mode_nodes"  # the paper rounds the tanks to the element grid
+    internal = _tank_layout(scenario, hull, n_int, n - n_int, per, make, snap)
+    if lift.layout == "mode_nodes":
+        external = _mode_layout(lift, modes, hull, n - n_int, per, make)
+    else:
+        external = _balanced_layout(scenario, hull, n - n_int, per, internal, make)
+    return external + internal, lift.layout
 
 
 def _mode_layout(lift, modes: Modes | None, hull: Hull, n_ext: int, per: float, make) -> list[Bag]:

@@ -173,6 +173,32 @@ def method_summary_rows(per_bag: dict) -> list[list]:
     return rows
 
 
+def _figures(fdir: Path, first, order: int) -> list[Figure]:
+    """The gains, Bode and time-response figures of the first (or chosen) bag's models."""
+    from flexlift.dynamics.reduce import band_grid
+    from flexlift.output.plots._style import draw
+    from flexlift.output.plots.reduce import plot_bode, plot_gains, plot_time
+
+    b, models, cmp, gains = first
+    full = models["full"]
+    what = f"{b.name}: {full.inputs[0]} → {full.outputs[0]}"
+    w = band_grid(full, cmp.omega_lo / 2, 3000)
+    f1 = float(full.omega[~full.rigid].min()) / TWO_PI
+    t = np.linspace(0.0, 10.0 / f1, 2001)
+    return [
+        Figure(draw(fdir / "reduce_gains.png", plot_gains, full, gains, cmp.omega_lo, what),
+               f"Per-mode gain of {what}: by mode (heave, pitch, flexible modes 1, 2, ...), "
+               "against frequency and sorted (flexible modes: dc gain; rigid modes: gain at "
+               "ω_lo)."),
+        Figure(draw(fdir / "reduce_bode.png", plot_bode, models, w, f"Bode, {what}"),
+               f"Bode magnitude and phase of the full and the four {order}-mode models, "
+               f"{what}."),
+        Figure(draw(fdir / "reduce_time.png", plot_time, models, t, f"Time responses, {what}"),
+               f"Step and impulse responses of the full and reduced models, {what}; right: "
+               "with the rigid-body motion subtracted, leaving the flexible response."),
+    ]
+
+
 def run_stage(scenario, out: Path | None = None, bag: str | None = None,
               order: int = DEFAULT_ORDER, output: str | None = None) -> StageOutput:
     """Reduce each external bag's model (or only ``bag``) to ``order`` modes and compare the
@@ -226,31 +252,9 @@ def run_stage(scenario, out: Path | None = None, bag: str | None = None,
     )
     figures: list[Figure] = []
     if out is not None:
-        from flexlift.dynamics.reduce import band_grid
-        from flexlift.output.plots._style import draw
-        from flexlift.output.plots.reduce import plot_bode, plot_gains, plot_time
-
-        b, models, cmp, gains = first
-        full = models["full"]
-        fdir, tdir = Path(out) / "figures", Path(out) / "tables"
-        what = f"{b.name}: {full.inputs[0]} → {full.outputs[0]}"
-        figures.append(Figure(
-            draw(fdir / "reduce_gains.png", plot_gains, full, gains, cmp.omega_lo, what),
-            f"Per-mode gain of {what}: by mode (heave, pitch, flexible modes 1, 2, ...), "
-            "against frequency and sorted (flexible modes: dc gain; rigid modes: gain at "
-            "ω_lo)."))
-        w = band_grid(full, cmp.omega_lo / 2, 3000)
-        figures.append(Figure(
-            draw(fdir / "reduce_bode.png", plot_bode, models, w, f"Bode, {what}"),
-            f"Bode magnitude and phase of the full and the four {order}-mode models, {what}."))
-        f1 = float(full.omega[~full.rigid].min()) / TWO_PI
-        t = np.linspace(0.0, 10.0 / f1, 2001)
-        figures.append(Figure(
-            draw(fdir / "reduce_time.png", plot_time, models, t, f"Time responses, {what}"),
-            f"Step and impulse responses of the full and reduced models, {what}; right: with "
-            "the rigid-body motion subtracted, leaving the flexible response."))
+        figures = _figures(Path(out) / "figures", first, order)
         for t in (worst_table, table, gains_table):
-            write_text(tdir / t.csv, t.to_csv())
+            write_text(Path(out) / "tables" / t.csv, t.to_csv())
     criteria = {"mdc_static_gain_exact": all(_mdc_exact(s) for s in per_bag.values())}
     return StageOutput(name=NAME, summary=summary, figures=figures,
                        tables=[worst_table, table, gains_table],
