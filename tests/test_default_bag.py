@@ -87,3 +87,25 @@ def test_a_sweeps_base_gets_it_too(tmp_path, monkeypatch):
                        "grid": {"seabed.breakout_time_s": [30, 60]}})
     assert seen == ["barge"]
     assert spec.base.lift.catalogue_bag.model.startswith("open_parachute_")
+
+
+def test_the_library_loads_what_the_command_line_runs(tmp_path):
+    """One function for every way in: the library's load_scenario of a user's hull chooses its
+    bag on the real lift plan as the command line does (50 t bags crowd the barge: 35 t)."""
+    f = tmp_path / "barge.yaml"
+    f.write_text(yaml.safe_dump(HULL))
+    lib = load_scenario(f)
+    assert lib.lift.catalogue_bag.model == "open_parachute_35t"
+    assert lib.defaulted["lift.catalogue_bag"] == "derived"
+    assert scenario_from(argparse.Namespace(scenario=str(f))) == lib
+    assert parse_scenario(HULL).lift.catalogue_bag.model == "open_parachute_50t"  # first tried
+
+
+def test_no_size_fits_and_the_small_ones_are_too_many(tmp_path):
+    """A short, narrow, heavy hull: no size's clusters fit and below some size the bags are
+    more than the cost limits allow; the largest is kept (the arrangement check says so), not
+    a refusal of the file."""
+    f = tmp_path / "pontoon.yaml"
+    f.write_text(yaml.safe_dump({**HULL, "hull": {**HULL["hull"], "length_m": 30.0,
+                                                   "breadth_m": 3.0}}))
+    assert load_scenario(f).lift.catalogue_bag.model == "open_parachute_50t"

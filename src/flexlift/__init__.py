@@ -15,6 +15,11 @@ holds the same list and checks every import against it):
 marker) is the bottom floor every layer may use; the top-level helpers (``constants``,
 ``errors``, ``_jit``, ``_struct``, ``_threads``) likewise.
 
+One function joins the floors the other way: :func:`loaded`, the scenario as every way in
+loads it (the library's ``load_scenario``, the command line, a sweep's base), chooses the
+default bag of a user's hull on its lift plan (``flexlift.loads.clusters``), which the
+scenario floor cannot compute.
+
 Units are SI throughout (m, s, kg, N, Pa, rad); tonnes, degrees and bar appear only in
 scenario files and reports.
 """
@@ -26,4 +31,15 @@ try:
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0+unknown"
 
-__all__ = ["__version__"]
+__all__ = ["__version__", "loaded"]
+
+
+def loaded(scenario):
+    """``scenario`` as every way in loads it: a user's hull without a bag choice given the
+    largest standard bag whose clusters fit (:func:`flexlift.loads.clusters.with_default_bag`);
+    any other scenario as it is. :func:`flexlift.scenario.load_scenario` returns this."""
+    if (scenario.defaulted or {}).get("lift.catalogue_bag") != "derived":
+        return scenario
+    from flexlift.loads.clusters import with_default_bag
+
+    return with_default_bag(scenario)

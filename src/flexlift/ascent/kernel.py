@@ -70,11 +70,14 @@ from flexlift.ascent.mechanics import (
     contact_matrices,
     generalised_force,
     implicit_matrix,
+    lifting_volume,
     strip_loads,
+    tipped_spill,
     trapezoidal_step,
     update_contact_matrices,
 )
 from flexlift.ascent.recording import group_uplift, log_event, store_row, store_snapshot  # noqa: F401
+from flexlift.ascent.records import BAG_PAPER
 from flexlift.ascent.state import (
     CONTACT_SUBSTEPS,
     EV_ARRIVAL,
@@ -274,11 +277,15 @@ def measure(t, k, plant, state, switches, settings):
 
 @jit
 def events(t, plant, state, switches, settings, recorder, w_min):
-    """The events of the current state; RET_STOP ends the run (a breach, the target held)."""
+    """The events of the current state; RET_STOP ends the run: the target held; a breach of
+    one of the paper's bags (no surface law); after a breach, the structure resettled."""
     for i in range(plant.bags.nb):
-        if switches.attached[i] > 0.0 and state.z[i] > settings.top_limit[i]:
+        if (switches.attached[i] > 0.0 and state.z[i] > settings.top_limit[i]
+                and not state.breached[i]):
+            state.breached[i] = True
             log_event(recorder, t, EV_SURFACE_BREACH, i, state.z[i])
-            return RET_STOP
+            if plant.bags.kind[i] == BAG_PAPER:
+                return RET_STOP
     if not state.sep.any():
         return RET_DONE
     limits(t, plant, state, switches, settings, recorder)
@@ -290,6 +297,8 @@ def events(t, plant, state, switches, settings, recorder, w_min):
         elif flags & F_LIFTOFF and w_min < 0.0:
             state.counters[1] |= F_RESETTLE
             log_event(recorder, t, EV_RESETTLE, -1, w_min)
+            if state.breached.any():  # broached, spilled and fallen back: the run ends
+                return RET_STOP
     return arrivals(t, plant, state, switches, settings, recorder)
 
 
@@ -449,12 +458,14 @@ def finish_step(t, plant, state, switches, settings, recorder, noise):
         p = state.p[i]
         # spill, relief venting
         out = vented_moles(n, p, plant.bags.capacity[i], plant.bags.relief[i], plant.bags.RT)
+        out += tipped_spill(plant, i, n - out, p, state.z[i])  # an open bag tipped at the surface
         if out > 0.0:
             n -= out
             state.vented[i] += out * plant.bags.RT / p
             state.vented_free[i] += out * plant.bags.RT / plant.bags.p_atm
         state.n[i], state.p[i] = n, p
-        state.V[i] = gas_volume(n, p, plant.bags.RT, plant.bags.capacity[i])
+        state.V[i] = lifting_volume(plant, i, gas_volume(n, p, plant.bags.RT,
+                                                         plant.bags.capacity[i]), state.z[i])
     state.counters[1] |= F_FRESH
     for g in range(plant.seabed.ng):
         if state.sep[g]:

@@ -4,7 +4,8 @@ The compiled loop (:mod:`flexlift.ascent.kernel`) runs in chunks; between chunks
 applies the faults due, draws the next chunk of noise, evaluates an external supervisor when
 one is used, and reports progress. The run stops when every bag point has held within
 ``limits.arrival_tolerance_m`` of the target for ``simulation.hold_time_s``, when a bag
-breaches the surface (the model ends there), at ``simulation.duration_s`` (``auto``: the
+breaches the surface (one of the paper's bags; a bag with a surface law goes on until the
+structure resettles: docs/theory/gas.md#surface), at ``simulation.duration_s`` (``auto``: the
 longest run the scenario's limits allow, the record grown as it goes), or with
 :class:`~flexlift.errors.SimulationError` (its ``partial`` the result so far) when the
 numerics fail.

@@ -4,7 +4,8 @@
 Loads on the structure (up positive) at a state:
 
 - bags: buoyancy rho g V at the bag's point (span for internal bags) minus the bag's drag,
-  times 1 while its sling holds; V from Boyle at the bag's local pressure;
+  times 1 while its sling holds; V from Boyle at the bag's local pressure, at the surface the
+  gas below the waterline of a bag with a surface law (docs/theory/gas.md#surface);
 - strips: hull drag on the velocity relative to the current, the force noise, the released
   suction of a separated group H_g shape(x) (down), and the seabed contact, one-sided, or
   tension-capable (bilateral) while the strip's group is held;
@@ -28,9 +29,11 @@ import numpy as np
 
 from flexlift._jit import jit
 from flexlift.ascent.linalg import matvec, matvec_add
-from flexlift.physics.gas import ambient_pressure, buoyancy, gas_volume
+from flexlift.ascent.records import BAG_ENCLOSED, BAG_OPEN_PARACHUTE, BAG_PAPER
+from flexlift.physics.gas import ambient_pressure, buoyancy, gas_volume, moles_of
 from flexlift.physics.hydro import drag
 from flexlift.physics.seabed import contact_load, in_contact
+from flexlift.physics.surface import waterline_volume
 
 
 @jit
@@ -43,11 +46,45 @@ def bag_motion(plant, q, v, z, zd):
 
 @jit
 def bag_gas(plant, n, z, p, V):
-    """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V."""
+    """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V (at the surface the
+    part below the waterline: :func:`lifting_volume`)."""
     bags = plant.bags
     for i in range(n.size):
         p[i] = ambient_pressure(z[i], bags.water_depth, bags.p_atm, bags.rho_g)
-        V[i] = gas_volume(n[i], p[i], bags.RT, bags.capacity[i])
+        V[i] = lifting_volume(plant, i, gas_volume(n[i], p[i], bags.RT, bags.capacity[i]), z[i])
+
+
+@jit
+def freeboard(plant, i, z):
+    """How far [m] bag ``i``'s top stands above the surface with its point at height ``z``
+    [m] (negative: below it)."""
+    bags = plant.bags
+    return z + bags.top_offset[i] - bags.water_depth
+
+
+@jit
+def lifting_volume(plant, i, volume, z):
+    """The part [m^3] of bag ``i``'s gas ``volume`` that displaces water with its point at
+    height ``z`` [m]: all of it below the surface; a bag with a surface law (any but
+    ``BAG_PAPER``) whose top stands above the surface, its gas below the waterline
+    (:func:`flexlift.physics.surface.waterline_volume`)."""
+    bags = plant.bags
+    if bags.kind[i] == BAG_PAPER:
+        return volume
+    return waterline_volume(volume, freeboard(plant, i, z), bags.body_diameter[i],
+                            bags.body_length[i], bags.cone_top[i], bags.kind[i] != BAG_ENCLOSED)
+
+
+@jit
+def tipped_spill(plant, i, n, p, z):
+    """Gas [mol] an open bag spills when it tips: past its tip freeboard an open parachute bag
+    (``BAG_OPEN_PARACHUTE``) keeps only its gas below the waterline (``n`` [mol] at the
+    ambient ``p`` [Pa], its point at height ``z`` [m]); 0 for any other bag or freeboard."""
+    bags = plant.bags
+    if bags.kind[i] != BAG_OPEN_PARACHUTE or freeboard(plant, i, z) <= bags.tip_freeboard[i]:
+        return 0.0
+    keep = lifting_volume(plant, i, gas_volume(n, p, bags.RT, bags.capacity[i]), z)
+    return max(n - moles_of(keep, p, bags.RT), 0.0)
 
 
 @jit

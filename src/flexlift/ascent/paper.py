@@ -82,7 +82,10 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
     bags = Bags(
         nb=ne, shape=shape.copy(), slope=np.tile(pitch_row, (ne, 1)), force=force.copy(),
         group=np.arange(ne, dtype=np.int64), capacity=pb.capacity[ext].copy(),
-        relief=np.zeros(ne), top_offset=pb.top_offset[ext].copy(), drag=pb.drag[ext].copy(),
+        relief=pb.relief[ext].copy(), kind=pb.kind[ext].copy(),
+        body_diameter=pb.body_diameter[ext].copy(), body_length=pb.body_length[ext].copy(),
+        cone_top=pb.cone_top[ext].copy(), tip_freeboard=pb.tip_freeboard[ext].copy(),
+        top_offset=pb.top_offset[ext].copy(), drag=pb.drag[ext].copy(),
         purge_max=pb.purge_max, supply_free_air=pb.supply_free_air, RT=pb.RT, p_atm=pb.p_atm,
         rho_g=pb.rho_g,
         water_depth=pb.water_depth, corr_shape=eye, corr_weight=-W * D,

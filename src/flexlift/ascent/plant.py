@@ -31,7 +31,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexlift import constants as C
-from flexlift.ascent.records import Bags, Modal, PlantRecords, Seabed, Strips
+from flexlift.ascent.records import (
+    BAG_ENCLOSED,
+    BAG_KINDS,
+    BAG_OPEN_PARACHUTE,
+    BAG_PAPER,
+    TIP_FRACTION,
+    Bags,
+    Modal,
+    PlantRecords,
+    Seabed,
+    Strips,
+)
 from flexlift.control.sequence import stage_groups
 from flexlift.errors import InputError
 from flexlift.loads.liftplan import LiftPlan, plan_lift
@@ -331,12 +342,10 @@ def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
                                        psi_b[:, nr:].T, lay.weight_gen[nr:])
     cs, cw = static_correction(psi_p[:, nr:], om2_e, weight_e)
     ss, sw = static_correction(dpsi_p[:, nr:], om2_e, weight_e)
-    relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)
     return Bags(
         nb=nb, shape=np.ascontiguousarray(psi_p[:, :nr]),
         slope=np.ascontiguousarray(dpsi_p[:, :nr]), force=np.ascontiguousarray(psi_b[:, :nr].T),
-        group=hold.bag_group, capacity=capacity, relief=relief,
-        top_offset=hull.depth + np.where(external, hydro.sphere_diameter(capacity), 0.0),
+        group=hold.bag_group, capacity=capacity, **bag_bodies(scenario, hull, external, capacity),
         drag=np.where(external, hydro.drag_coefficient(
             rho, hy.bag_drag_coefficient, 1.0) * hydro.sphere_frontal_area(capacity), 0.0),
         purge_max=scenario.gas.purge_rate_max_m3_s,
@@ -344,6 +353,48 @@ def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
         **gas_constants(scenario),
         corr_shape=cs, corr_weight=cw, slope_shape=ss, slope_weight=sw,
         gen_strip=np.ascontiguousarray(strip_e), gen_bag=np.ascontiguousarray(bag_e))
+
+
+def bag_bodies(scenario, hull: Hull, external: np.ndarray, capacity: np.ndarray) -> dict:
+    """Each bag's type and body (:class:`~flexlift.ascent.records.Bags`: ``relief``, ``kind``,
+    ``body_diameter``, ``body_length``, ``cone_top``, ``tip_freeboard``, ``top_offset``).
+
+    The external bags are of the catalogue bag's type (``lift.catalogue_bag.type``), the
+    internal ones (in the tanks) the paper's closed cylinders. The paper's type keeps the
+    paper's bags as before: external bags spill beyond their capacity, internal ones relieve at
+    ``gas.relief_pressure_bar``, a bag's top is a sphere of its capacity above the hull's depth.
+    A salvor's bag (docs/theory/gas.md#bag-types): open parachute bags spill from the mouth,
+    closed parachute and enclosed bags relieve at their catalogue setting (else
+    ``gas.relief_pressure_bar``); its body is the catalogue's diameter and length (an upright
+    bag's length is its height), lengthened to hold its true capacity (``capacity_factor`` > 1),
+    its top ``rigging.sling_length_m`` and its height above the hull's depth; an open bag tips
+    once its top stands :data:`~flexlift.ascent.records.TIP_FRACTION` of its height above the
+    surface."""
+    bag, gas_relief = scenario.lift.catalogue_bag, scenario.gas.relief_pressure_bar * C.BAR
+    kind_ext = BAG_KINDS[bag.type]
+    nb = external.size
+    kind = np.where(external, kind_ext, BAG_PAPER).astype(np.int64)
+    out = dict(relief=np.where(external, 0.0, gas_relief), kind=kind,
+               body_diameter=np.zeros(nb), body_length=np.zeros(nb), cone_top=np.zeros(nb),
+               tip_freeboard=np.full(nb, np.inf),
+               top_offset=hull.depth + np.where(external, hydro.sphere_diameter(capacity), 0.0))
+    if kind_ext == BAG_PAPER:
+        return out
+    D = bag.diameter_m
+    area = 0.25 * math.pi * D * D
+    cone = (bag.cone_top_m or 0.0) if kind_ext != BAG_ENCLOSED else 0.0
+    length = np.maximum(bag.length_m, capacity / area + 2.0 * cone / 3.0)
+    height = length if kind_ext != BAG_ENCLOSED else np.full(nb, D)
+    relief = 0.0 if kind_ext == BAG_OPEN_PARACHUTE else (
+        bag.relief_bar * C.BAR if bag.relief_bar is not None else gas_relief)
+    tip = TIP_FRACTION * height if kind_ext == BAG_OPEN_PARACHUTE else np.full(nb, np.inf)
+    ext = external
+    out.update(relief=np.where(ext, relief, out["relief"]),
+               body_diameter=np.where(ext, D, 0.0), body_length=np.where(ext, length, 0.0),
+               cone_top=np.where(ext, cone, 0.0), tip_freeboard=np.where(ext, tip, np.inf),
+               top_offset=np.where(ext, hull.depth + scenario.lift.rigging.sling_length_m
+                                   + height, out["top_offset"]))
+    return out
 
 
 def seabed_record(scenario, plan: LiftPlan, nr: int, lay: Layout, hold: Holding) -> Seabed:

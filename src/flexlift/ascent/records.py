@@ -25,6 +25,22 @@ from typing import NamedTuple
 
 import numpy as np
 
+#: ``Bags.kind``: the paper's bags (external bags spill beyond their capacity, internal ones
+#: relieve at ``gas.relief_pressure_bar``; no surface law: the run ends at a breach, as before)
+BAG_PAPER = 0
+#: an open parachute bag: spills from its mouth; at the surface it broaches (lifts its gas below
+#: the waterline) and past its tip freeboard tips and spills to that (docs/theory/gas.md#surface)
+BAG_OPEN_PARACHUTE = 1
+#: a closed parachute bag: relieves at its setting over ambient; at the surface it floats
+BAG_CLOSED_PARACHUTE = 2
+#: an enclosed bag (a lying cylinder): relieves at its setting; at the surface it floats
+BAG_ENCLOSED = 3
+#: ``lift.catalogue_bag.type`` -> the kind of the plan's external bags
+BAG_KINDS = {"pressurised_cylinder": BAG_PAPER, "open_parachute": BAG_OPEN_PARACHUTE,
+             "closed_parachute": BAG_CLOSED_PARACHUTE, "enclosed": BAG_ENCLOSED}
+#: an open bag tips once its top stands this fraction of its height above the surface
+TIP_FRACTION = 0.25
+
 
 class Modal(NamedTuple):
     """The retained modal coordinates q [m sqrt(kg)]: q'' + damping q' + omega2 q = Q.
@@ -91,6 +107,12 @@ class Bags(NamedTuple):
     group (nb,) int           -           the holding group each bag lifts
     capacity (nb,)            m^3         bag capacity V_max
     relief (nb,)              Pa          over-pressure relief setting (0: open bag)
+    kind (nb,) int            -           the bag's type (``BAG_*`` above): its surface law
+    body_diameter (nb,)       m           the body's diameter D (a bag with a surface law)
+    body_length (nb,)         m           its length: the height of an upright bag, at least
+                                          its true capacity over pi D^2 / 4
+    cone_top (nb,)            m           height of an upright bag's conical top (0: flat)
+    tip_freeboard (nb,)       m           an open bag tips past this freeboard (inf: never)
     top_offset (nb,)          m           height of a bag's top above the hull bottom
     drag (nb,)                kg/m        bag drag coefficient 1/2 rho C_D,bag A
     purge_max                 m^3/s       the purge valves' largest flow Q_out,max
@@ -125,6 +147,11 @@ class Bags(NamedTuple):
     group: np.ndarray
     capacity: np.ndarray
     relief: np.ndarray
+    kind: np.ndarray
+    body_diameter: np.ndarray
+    body_length: np.ndarray
+    cone_top: np.ndarray
+    tip_freeboard: np.ndarray
     top_offset: np.ndarray
     drag: np.ndarray
     purge_max: float

@@ -17,6 +17,7 @@ import xarray as xr
 from flexlift import constants as C
 from flexlift.ascent.amplification import amplification, largest
 from flexlift.ascent.outcome import judge
+from flexlift.ascent.records import BAG_OPEN_PARACHUTE, BAG_PAPER
 from flexlift.ascent.state import (
     EV_ARRIVAL,
     EV_BREAKOUT,
@@ -152,6 +153,21 @@ def _r(v, nd=3):
     return None if v is None or not np.isfinite(v) else round(float(v), nd)
 
 
+def _breach_detail(kind: int) -> str:
+    """What a bag of ``kind`` (:data:`flexlift.ascent.records.BAG_KINDS`) does at the surface."""
+    return {BAG_PAPER: "the run ends at the surface",
+            BAG_OPEN_PARACHUTE: "it broaches: only its gas below the waterline lifts; past its "
+                                "tip freeboard it tips and spills; the run goes on",
+            }.get(kind, "it floats on its gas below the waterline; the run goes on")
+
+
+def ended_at_surface(run, events: list[dict]) -> bool:
+    """Whether the run ended at a surface breach (one of the paper's bags: no surface law)."""
+    kind = dict(zip(run.plant.names, run.plant.bags.kind))
+    return any(e["kind"] == "surface_breach" and kind.get(e["bag"]) == BAG_PAPER
+               for e in events)
+
+
 def event_list(run) -> list[dict]:
     """The run's events (compiled loop and faults) in time order, with names and details."""
     rec, P, X = run.recorder, run.plant, run.settings
@@ -162,7 +178,7 @@ def event_list(run) -> list[dict]:
         kind = EVENT_KINDS[code]
         bag = (P.names[i] if code in (EV_ARRIVAL, EV_SURFACE_BREACH, EV_LIMIT_VELOCITY,
                                       EV_LIMIT_DESCENT) else None)
-        detail = {EV_SURFACE_BREACH: "the run ends at the surface",
+        detail = {EV_SURFACE_BREACH: _breach_detail(int(P.bags.kind[i])) if i >= 0 else "",
                   EV_LIMIT_VELOCITY: f"{val:.2f} m/s upward",
                   EV_LIMIT_DESCENT: f"{val:.2f} m/s downward",
                   EV_LIMIT_PITCH: f"{np.degrees(val):.1f} deg",
@@ -455,7 +471,9 @@ def explain(run, events, crit, vmax: float, vdown: float, pmax: float, error) ->
     if not crit["no_surface_breach"]:
         e = first("surface_breach")
         out["no_surface_breach"] = (f"{_fault_before(events, e['time_s'])}{e['bag']} reached the "
-                                    f"surface at {e['time_s']:.0f} s; the run ends there")
+                                    f"surface at {e['time_s']:.0f} s; " + (
+                                        "the run ends there" if ended_at_surface(run, events) else
+                                        "the run went on (its surface law)"))
     if not crit["no_resettle"]:
         e = first("resettle")
         out["no_resettle"] = (f"{_fault_before(events, e['time_s'])}the hull touched the seabed "
@@ -464,8 +482,12 @@ def explain(run, events, crit, vmax: float, vdown: float, pmax: float, error) ->
         end = float(run.recorder.t[max(int(run.recorder.counts[0]) - 1, 0)])
         if error:
             out["reached_target"] = f"the run stopped at {end:.0f} s: {error}"
-        elif first("surface_breach"):
+        elif ended_at_surface(run, events):
             out["reached_target"] = "the run ended at the surface breach"
+        elif first("surface_breach") and first("resettle"):
+            out["reached_target"] = (f"a bag broke the surface at {first('surface_breach')['time_s']:.0f}"
+                                     f" s and the hull fell back: the run ended when it resettled"
+                                     f" at {first('resettle')['time_s']:.0f} s")
         elif first("separation") is None:
             out["reached_target"] = ("never separated in the "
                                      f"{end:,.0f} s run: {breakout_check(sc, run.plant).message}")

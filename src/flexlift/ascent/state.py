@@ -112,6 +112,7 @@ class RunState(NamedTuple):
     flow0: np.ndarray  # (2, nb) pressure [Pa] and purge flow [m^3/s] at the start of the step
     H_old: np.ndarray  # (ng,) holding forces at the start of the step [N]
     gap: np.ndarray  # (ng,) uplift minus hold at the start of the step [N]
+    breached: np.ndarray  # (nb,) bool: the bag has breached the surface (its event logged)
 
 
 # flags in RunState.counters[1]
@@ -177,4 +178,4 @@ def new_run_state(nr: int, nb: int, ns: int, ng: int) -> RunState:
         w=z(ns), wv=z(ns), line=z(ns), contact=z(ns), active=z(ns, np.bool_),
         last_active=z(ns, np.bool_), point=z(nb), b=z(nr), implicit=z((nr, nr)),
         stiff=z((nr, nr)), damp=z((nr, nr)), meas=z((3, nb)), work=z((6, nr)), ndot=z(nb),
-        flow0=z((2, nb)), H_old=z(ng), gap=z(ng))
+        flow0=z((2, nb)), H_old=z(ng), gap=z(ng), breached=z(nb, np.bool_))

@@ -36,10 +36,9 @@ def add_json_arg(p: argparse.ArgumentParser) -> None:
 
 def scenario_from(args: argparse.Namespace) -> Scenario:
     """The scenario named on the command line, a user's hull given its default bag
-    (loads/clusters.py: the largest standard size whose clusters fit)."""
-    from flexlift.loads.clusters import with_default_bag
-
-    return with_default_bag(load_scenario(args.scenario))
+    (loads/clusters.py: the largest standard size whose clusters fit), as the library's
+    :func:`~flexlift.scenario.load_scenario` loads it."""
+    return load_scenario(args.scenario)
 
 
 def _field(key: str):

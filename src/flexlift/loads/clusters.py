@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 
+from flexlift.errors import InputError
+
 __all__ = ["across", "cluster_lengths", "cluster_faults", "DEFAULT_SIZES_T", "default_bag"]
 
 #: the standard sizes a user's hull may get, largest first (<= 50 t, the largest in use)
@@ -52,7 +54,8 @@ def default_bag(scenario, plan_of):
     """``scenario`` with the default bag of a user's hull chosen: when flexlift derived its
     bag (``defaulted["lift.catalogue_bag"]``), the largest standard open parachute bag <= 50 t
     whose clusters fit (``plan_of(scenario)`` -> its lift plan); the largest when none fits
-    (the arrangement check then says so). Any other scenario is returned as it is."""
+    (the arrangement check then says so), or when the sizes left need more bags than the cost
+    limits allow. Any other scenario is returned as it is."""
     if (scenario.defaulted or {}).get("lift.catalogue_bag") != "derived":
         return scenario
     h = scenario.hull
@@ -62,7 +65,10 @@ def default_bag(scenario, plan_of):
         choice = (scenario if scenario.lift.catalogue_bag.model == model else
                   scenario.with_changes(**{"lift.catalogue_bag": {"model": model}}))
         first = first or choice
-        plan = plan_of(choice)
+        try:
+            plan = plan_of(choice)
+        except InputError:  # too many bags of this size for the cost limits: smaller ones too
+            break
         bag = choice.lift.catalogue_bag
         if not cluster_faults(plan.lift_points(), bag.diameter_m, h.breadth_m, h.length_m):
             return choice
@@ -70,8 +76,10 @@ def default_bag(scenario, plan_of):
 
 
 def with_default_bag(scenario):
-    """:func:`default_bag` with the lift plan of :func:`flexlift.loads.liftplan.plan_lift` (the
-    command line and a sweep's base call it on the scenario they load)."""
+    """:func:`default_bag` with the lift plan of :func:`flexlift.loads.liftplan.plan_lift`:
+    every way in loads a scenario through it (:func:`flexlift.loaded`, called by
+    :func:`flexlift.scenario.load_scenario`, so the library, the command line and a sweep's
+    base agree)."""
     from flexlift.loads.liftplan import plan_lift
     from flexlift.structure.hull import hull_from_scenario
 

@@ -2,6 +2,8 @@
 
 - :mod:`.gas`: lift-bag gas (isothermal ideal gas, volume at local pressure, capacity, spill
   and relief, fill, the purge orifice, buoyancy, expansion);
+- :mod:`.surface`: a bag at the surface (its gas below the waterline, the body's volume from
+  its top);
 - :mod:`.seabed`: the holding force (held and released) and seabed contact;
 - :mod:`.hydro`: drag and added mass.
 

@@ -166,6 +166,7 @@ class CatalogueBag(_Section):
     lift_t: BagLift = 565.0  # rated lift
     working_pressure_bar: real(0.1, 50) | None = 2.8  # pressurised cylinders; none: not stated
     relief_bar: real(0.001, 10) | None = None  # closed and enclosed bags: over ambient
+    cone_top_m: real(0.01, 50) | None = None  # an upright bag's conical top (within length_m)
     dump_valve_m3_s: real(1e-6, 100) | None = None  # the maker's dump-valve capacity
     rated_depth_m: real(0.1, 12_000) | None = None  # the maker's; none: not given
     # true gas capacity over the rated one (a published incident: 1.25); the bag-count rule
@@ -732,7 +733,9 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     Returns
     -------
     Scenario
-        The validated scenario, every default filled in (units in the key names).
+        The validated scenario, every default filled in (units in the key names); a user's
+        hull without a bag choice gets the largest standard bag whose clusters fit on it
+        (:func:`flexlift.loaded`, as on the command line and in a sweep's base).
 
     Raises
     ------
@@ -774,4 +777,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         data = {**data, "lift": {**lift, "catalogue_file": reading.absolute(
             path.parent / lift["catalogue_file"])}}
     scenario = parse_scenario(data, source=source)
-    return _resolve_files(scenario, path.parent) if reading.exists(path) else scenario
+    scenario = _resolve_files(scenario, path.parent) if reading.exists(path) else scenario
+    import flexlift  # the package root: a user's hull gets its default bag (flexlift.loaded)
+
+    return flexlift.loaded(scenario)

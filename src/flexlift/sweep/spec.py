@@ -246,9 +246,7 @@ def _base(ref, source: str, folder: Path | None) -> Scenario:
                          f"({', '.join(builtin_names())}) or a path to a scenario YAML file")
     near = (folder / ref) if folder is not None and not Path(ref).is_absolute() else Path(ref)
     try:
-        from flexlift.loads.clusters import with_default_bag
-
-        return with_default_bag(load_scenario(near if reading.exists(near) else ref))
+        return load_scenario(near if reading.exists(near) else ref)  # a hull's default bag
     except InputError as exc:
         raise InputError.from_line(f"{source}: base: {exc}") from None
 
