@@ -112,3 +112,27 @@ def test_a_capacity_list_of_the_wrong_length_is_one_line():
 def test_a_wll_or_capacity_that_is_not_positive_is_refused(key):
     with pytest.raises(InputError, match=key):
         load_scenario("tanker").with_changes(**{f"lift.rigging.{key}": 0})
+
+
+@pytest.mark.parametrize("kind, excess", [("open_parachute", "spills the rest from its mouth"),
+                                          ("closed_parachute", "its relief valve must pass it")])
+def test_the_dump_valve_against_the_expansion_at_the_planned_speed(kind, excess):
+    """A full bag (the plan's 49 t: 47.8 m3) rising at 0.2 m/s at a target 10 m deep (2.02
+    bar) expands at V rho g v / p = 0.476 m3/s, more than its 0.407 m3/s valve: the check trips
+    with the speed the valve holds (0.2 x 0.407 / 0.476) and the valve it needs; 30 m deep it
+    passes."""
+    from flexlift.ascent.arrangement import dump_valve_check
+
+    s = load_scenario(TRAWLER).with_changes(**{
+        "lift.catalogue_bag": {"model": f"{kind}_50t"}, "control.target_height_m": 110.0})
+    V = 49e3 / 1025.0
+    p = 101325.0 + 1025.0 * 9.81 * 10.0
+    rate = V * 1025.0 * 9.81 * 0.2 / p
+    check = dump_valve_check(s, _plan(s))
+    assert not check.ok
+    assert f"expands at {rate:.3g} m3/s" in check.message and f"({p / 1e5:.2f} bar)" in check.message
+    assert excess in check.message
+    assert f"at most {0.2 * 0.407 / rate:.3g} m/s" in check.message
+    assert f"dump valve of at least {rate:.3g} m3/s" in check.message
+    deep = s.with_changes(**{"control.target_height_m": 90.0})
+    assert dump_valve_check(deep, _plan(deep)).ok

@@ -109,6 +109,10 @@ def test_a_users_catalogue_file_extends_the_packaged_one(tmp_path):
     ("{type: enclosed, diameter_m: 2, length_m: 3}", "lift_t is missing"),
     ("{type: enclosed, lift_t: 50, diameter_m: 1, length_m: 2}", "holds 1.57 m3, less than"),
     ("{type: balloon, lift_t: 5, diameter_m: 3, length_m: 3}", "type balloon is not one of"),
+    ("{type: open_parachute, lift_t: 5, diameter_m: 2, length_m: 3, cone_top_m: 3}",
+     "cone_top_m = 3 m is the conical top"),
+    ("{type: enclosed, lift_t: 5, diameter_m: 2, length_m: 3, cone_top_m: 1}",
+     "of an upright \\(parachute\\) bag"),
 ])
 def test_a_bad_catalogue_entry_is_one_line(tmp_path, entry, match):
     f = _user(tmp_path, f"bags:\n  my_bag: {entry}\n")

@@ -6,6 +6,9 @@ docs/theory/factors.md#rigging): each says what it found, with its numbers and t
   lift point, inside the hull and clear of the neighbouring clusters (:mod:`flexlift.loads.clusters`);
 - headroom: a bag's height and its sling against the water above the hull at the target;
 - rated depth: the catalogue bag's rated depth against the wreck's depth (the water depth);
+- dump valve: the catalogue bag's dump-valve capacity against the expansion of a full bag's
+  gas at the planned ascent speed at the target, dV/dt = V rho g v / p, per type (an open bag
+  spills a full bag's excess from its mouth, a closed one relieves it);
 - rigging: each sling's design load is its bag's full true lift, capacity_factor x the larger
   of its rated and modelled lift (any single failure, a fill valve stuck open, fills it),
   compared with the sling's and shackle's working load limit, which already holds the
@@ -21,6 +24,7 @@ from dataclasses import dataclass
 
 from flexlift.errors import InputError
 from flexlift.loads.clusters import across, cluster_faults, cluster_lengths
+from flexlift.physics.gas import expansion_rate
 
 #: GL Noble Denton 0027/ND Table 11-1: consequence factor of lift points and their attachments
 CONSEQUENCE_LIFT_POINT = 1.30
@@ -90,6 +94,58 @@ def depth_check(scenario) -> Check:
     if not ok:
         msg += "; choose a bag rated for the depth"
     return Check("rated_depth", bool(ok), msg)
+
+
+def expansion_rate_at_target(scenario, volume: float) -> tuple[float, float]:
+    """(dV/dt [m^3/s], ambient pressure [Pa]) of ``volume`` [m^3] of gas rising at the
+    planned speed at the target, the shallowest point of the plan (docs/theory/gas.md#purge-capacity):
+    dV/dt = V rho g v / p, the pressure at the bag's point as the loop takes it."""
+    env, c = scenario.environment, scenario.control
+    rho_g = env.seawater_density_kg_m3 * env.gravity_m_s2
+    p = env.atmospheric_pressure_Pa + rho_g * max(env.water_depth_m - c.target_height_m, 0.0)
+    return float(expansion_rate(volume, p, rho_g, c.ascent_speed_m_s)), float(p)
+
+
+#: what a bag of each type does with the gas its dump valve cannot pass
+_EXCESS = {"open_parachute": "a full open bag spills the rest from its mouth, but one below full "
+                             "gains lift faster than the valve can take it away",
+           "closed_parachute": "the rest raises the bag's pressure to its relief setting and "
+                               "its relief valve must pass it",
+           "enclosed": "the rest raises the bag's pressure to its relief setting and its "
+                       "relief valve must pass it",
+           "pressurised_cylinder": "the rest raises the cylinder's pressure to its relief "
+                                   "setting"}
+
+
+def dump_valve_check(scenario, plan) -> Check:
+    """The catalogue bag's dump valve against the expansion of a full bag's gas (its true
+    capacity) rising at the planned speed at the target, per type (what the gas it cannot pass
+    does: ``_EXCESS``); with the speed it can hold and the valve it would need."""
+    bag, c, gas = scenario.lift.catalogue_bag, scenario.control, scenario.gas
+    if not plan.external:
+        return Check("dump_valve", True, "no external bags: no dump valve to size")
+    volume = max(b.capacity for b in plan.external)
+    rate, p = expansion_rate_at_target(scenario, volume)
+    where = (f"a full bag ({volume:.3g} m3) rising at the planned {c.ascent_speed_m_s:g} m/s "
+             f"at the {c.target_height_m:g} m target ({p / 1e5:.2f} bar) expands at "
+             f"{rate:.3g} m3/s")
+    if bag.dump_valve_m3_s is None:
+        return Check("dump_valve", True, f"the bag's dump-valve capacity is not given; {where}; "
+                     f"the run takes gas.purge_rate_max_m3_s = {gas.purge_rate_max_m3_s:g} m3/s "
+                     "(the purge-capacity check); give lift.catalogue_bag.dump_valve_m3_s from "
+                     "its maker")
+    valve = bag.dump_valve_m3_s
+    ok = valve >= rate
+    msg = (f"{bag.type.replace('_', ' ')} bag: its dump valve passes {valve:.3g} m3/s; {where}"
+           + (f" (margin {valve / rate:.2f})" if ok and rate > 0 else ""))
+    if not ok:
+        msg += (f": {_EXCESS[bag.type]}; lower control.ascent_speed_m_s to at most "
+                f"{c.ascent_speed_m_s * valve / rate:.3g} m/s, or use a dump valve of at least "
+                f"{rate:.3g} m3/s")
+    if gas.purge_rate_max_m3_s > valve:
+        msg += (f" (the run assumes gas.purge_rate_max_m3_s = {gas.purge_rate_max_m3_s:g} m3/s, "
+                "more than this valve)")
+    return Check("dump_valve", bool(ok), msg)
 
 
 def design_loads_t(scenario, plan) -> list[tuple[float, list[str], float]]:
@@ -172,5 +228,5 @@ def rigging_checks(scenario, plan) -> list[Check]:
 
 def arrangement_checks(scenario, plan) -> list[Check]:
     """Every arrangement and rigging check of ``plan`` (module docstring)."""
-    return ([cluster_check(scenario, plan), headroom_check(scenario), depth_check(scenario)]
-            + rigging_checks(scenario, plan))
+    return ([cluster_check(scenario, plan), headroom_check(scenario), depth_check(scenario),
+             dump_valve_check(scenario, plan)] + rigging_checks(scenario, plan))

@@ -62,8 +62,10 @@ def generic_entry(kind: str, lift_t: float) -> dict:
 
 
 def body_volume(entry: dict) -> float:
-    """The volume the bag's body holds [m^3]: a cylinder of its diameter and length."""
-    return math.pi * entry["diameter_m"] ** 2 * entry["length_m"] / 4.0
+    """The volume the bag's body holds [m^3]: a cylinder of its diameter and length (less two
+    thirds of the cylinder around its conical top, ``cone_top_m``, when it has one)."""
+    cone = entry.get("cone_top_m") or 0.0
+    return math.pi * entry["diameter_m"] ** 2 * (entry["length_m"] - 2.0 * cone / 3.0) / 4.0
 
 
 def rated_volume(entry: dict) -> float:
@@ -106,6 +108,11 @@ def check_entry(name: str, entry, source: str) -> dict:
         if v is not None and not (_num(v) and v > 0):
             raise InputError.from_line(f"{where}: {f} = {clean(str(v), 40)} must be a positive "
                                        "number")
+    cone = entry.get("cone_top_m")
+    if cone is not None and (entry["type"] not in UPRIGHT or cone >= entry["length_m"]):
+        raise InputError.from_line(
+            f"{where}: cone_top_m = {cone:g} m is the conical top of an upright (parachute) "
+            f"bag, less than its length_m ({entry['length_m']:g} m)")
     if not entry.get("as_published") and body_volume(entry) < rated_volume(entry) * (1 - 1e-3):
         raise InputError.from_line(
             f"{where}: a body of {entry['diameter_m']:g} m x {entry['length_m']:g} m holds "
