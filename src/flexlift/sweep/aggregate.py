@@ -297,3 +297,29 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Da
     for h, arr in nums.items():
         data[h] = (("case", "control"), arr, {"units": _unit(h), "long_name": f"headline {h}"})
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+# --------------------------------------------------------------------------- convergence
+#: most points of a convergence curve
+CONVERGENCE_POINTS = 40
+
+
+def convergence(records: dict, modes) -> dict:
+    """{mode: {"n": [cases], outcome: [[p, low, high], ...]}}: each probability (the outcomes
+    but safe, and the lift failing) after the first n cases run (by case index), at up to
+    :data:`CONVERGENCE_POINTS` values of n spaced geometrically, the last all of them."""
+    out = {}
+    for mode in modes:
+        kinds = [outcome_of(r["results"][mode]) for r in ran(records, mode)]
+        total = len(kinds)
+        if not total:
+            out[mode] = {"n": []}
+            continue
+        ns = sorted({int(round(v)) for v in np.geomspace(1, total, CONVERGENCE_POINTS)} | {total})
+        curve: dict = {"n": ns}
+        for k in [*(o for o in OUTCOMES if o != "safe"), ALL]:
+            hits = np.cumsum([(kind in FAILING) if k == ALL else (kind == k) for kind in kinds])
+            curve[k] = [[w["p"], w["low"], w["high"]]
+                        for w in (wilson(int(hits[n - 1]), n) for n in ns)]
+        out[mode] = curve
+    return out
