@@ -230,3 +230,41 @@ def test_convergence_curve_is_each_probability_after_the_first_n_cases():
     assert curve["all_criteria"][j] == curve["unsafe"][j]
     w = agg.wilson(10, 40)
     assert curve["unsafe"][j][1:] == [w["low"], w["high"]]
+
+
+# --------------------------------------------------------------------------- cheaper start
+def test_the_latin_hypercube_and_the_ranks_are_scipys_without_importing_it():
+    from scipy.stats import qmc
+    from scipy.stats import rankdata as scipy_ranks
+
+    from flexlift.sweep.aggregate import rankdata
+    from flexlift.sweep.cases import _lhs
+
+    for seed, d, n in ((0, 1, 1), (1, 3, 10), (7, 13, 500), (2 ** 40, 4, 7)):
+        want = qmc.LatinHypercube(d=d, rng=np.random.default_rng(
+            np.random.SeedSequence(seed))).random(n)
+        assert np.array_equal(_lhs(d, n, np.random.SeedSequence(seed)), want), (seed, d, n)
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        a = rng.integers(0, 5, size=int(rng.integers(1, 30))).astype(float)
+        assert np.array_equal(rankdata(a), scipy_ranks(a))
+
+
+def test_a_sweep_starts_its_workers_before_reading_the_spec():
+    import subprocess
+    import sys
+
+    code = ("import sys, flexlift.cli as c\n"
+            "c.build_parser = lambda: sys.exit('mods' + str(int('flexlift.ascent' in "
+            "sys.modules)))\n"
+            "from multiprocessing import forkserver\n"
+            "try:\n    c.main(sys.argv[1:])\n"
+            "except SystemExit as e:\n"
+            "    print(e.code, forkserver._forkserver._forkserver_pid is not None)\n")
+    for args, started in ((["sweep", "s.yaml", "--workers", "2"], True),
+                          (["sweep", "s.yaml", "--workers", "1"], False),
+                          (["sweep", "s.yaml", "--dask-local", "2"], False),
+                          (["run", "tanker"], False)):
+        out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True,
+                             text=True, timeout=120).stdout.split()
+        assert out == ["mods0", str(started)], (args, out)

@@ -104,10 +104,19 @@ def _main(args: argparse.Namespace) -> int:
     from flexlift.sweep.executors import SchedulerLost, make_engine
     from flexlift.sweep.worker import CaseError, OutsideCases
 
-    spec = _spec(args)
+    engine = None
+    if args.scheduler is None and args.dask_local is None:  # its workers warm up meanwhile
+        engine = make_engine(args.workers, None, None)
+    try:
+        spec = _spec(args)
+    except BaseException:
+        if engine is not None:
+            engine.close(cancel=True)
+        raise
     stem = Path(args.spec).stem if args.study is None else f"{args.study}-{Path(args.spec).stem}"
     out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{stem}"
-    engine = make_engine(args.workers, args.scheduler, args.dask_local)
+    if engine is None:
+        engine = make_engine(args.workers, args.scheduler, args.dask_local)
     try:
         _check_cost(spec, engine.workers, args)
     except BaseException:

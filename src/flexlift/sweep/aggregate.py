@@ -71,14 +71,28 @@ def wilson(failed: int, n: int, z: float = Z95) -> dict:
 
 def spearman(x, y) -> float | None:
     """Spearman's rank correlation (average ranks for ties); None when either is constant."""
-    from scipy.stats import rankdata
-
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     if x.size < 3 or np.ptp(x) == 0 or np.ptp(y) == 0:
         return None
     rx, ry = rankdata(x), rankdata(y)
     rx, ry = rx - rx.mean(), ry - ry.mean()
     return float(np.dot(rx, ry) / math.sqrt(np.dot(rx, rx) * np.dot(ry, ry)))
+
+
+def rankdata(a) -> np.ndarray:
+    """Ranks 1..n, ties given their average rank (``scipy.stats.rankdata``'s default, here
+    without importing ``scipy.stats``)."""
+    a = np.asarray(a, dtype=float)
+    order = np.argsort(a, kind="mergesort")
+    sorted_a = a[order]
+    first = np.r_[True, sorted_a[1:] != sorted_a[:-1]]
+    group = np.cumsum(first) - 1
+    starts = np.flatnonzero(first)
+    ends = np.r_[starts[1:], a.size]
+    mean_rank = (starts + ends + 1) / 2.0  # the average of ranks start+1 .. end
+    out = np.empty(a.size)
+    out[order] = mean_rank[group]
+    return out
 
 
 # --------------------------------------------------------------------------- outcomes

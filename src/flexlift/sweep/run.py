@@ -31,6 +31,7 @@ from flexlift import __version__
 from flexlift.errors import clean
 from flexlift.sweep import aggregate as agg
 from flexlift.sweep.cases import Case, case_name, case_scenario, changes, make_cases
+from flexlift.sweep.executors import Serial
 from flexlift.sweep.spec import SweepSpec
 from flexlift.sweep.store import SweepFolder
 from flexlift.sweep.worker import CaseError, Task, run_case
@@ -132,6 +133,8 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
             if progress is not None:
                 progress(len(records), len(cases), _failures(records))
             ran_now = 0
+            if not isinstance(engine, Serial) and len(records) < len(cases):
+                _import_meanwhile()
             for block in _blocks(spec, cases):
                 todo = [c for c in block if c.index not in records]
                 if engine is None and todo:
@@ -159,6 +162,26 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
     if engine is not None:
         engine.close()
     return result
+
+
+#: what the results need and the coordinator imports while the workers run the cases
+TAIL_MODULES = ("flexlift.sweep.report", "scipy.io")
+
+
+def _import_meanwhile() -> None:
+    """Import :data:`TAIL_MODULES` (matplotlib, the netCDF writer) in a background thread:
+    the coordinator waits on its workers anyway, so the results are not held up by them."""
+    import importlib
+    import threading
+
+    def load():
+        for name in TAIL_MODULES:
+            try:
+                importlib.import_module(name)
+            except Exception:  # the results import it again, and report any error there
+                log.debug("could not import %s ahead", name, exc_info=True)
+
+    threading.Thread(target=load, name="flexlift-import", daemon=True).start()
 
 
 def _blocks(spec: SweepSpec, cases: list[Case]):
