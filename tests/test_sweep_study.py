@@ -160,6 +160,8 @@ def test_a_sobol_study_gives_indices_and_no_probability(tmp_path):
     assert s["failure_probability"] == {} and "sobol" in s
     assert set(s["sobol"]["coordinated"]) >= {"margin_ascent_velocity", "arrival_time_s"}
     assert "Which uncertainty matters" in (tmp_path / "o" / "report.html").read_text()
+    again = run_sweep(spec, tmp_path / "o", engine=Serial())  # resumed: nothing to run
+    assert again.ran == 0 and again.summary["sobol"] == s["sobol"]
 
 
 # --------------------------------------------------------------------------- half-width

@@ -154,9 +154,10 @@ def _main(args: argparse.Namespace) -> int:
     s = result.summary
     if args.json:
         fp = {c: {k: v[k] for k in ("p", "low", "high")} for c, v in s["failure_probability"].items()}
+        extra = {k: s[k] for k in ("sobol", "stopped_at", "halfwidths") if k in s}
         emit_json({"cases": s["cases"], "completed": s["completed"], "failed": s["failed"],
                    "engine": s["engine"], "failure_probability": fp,
-                   "sensitivity": s["sensitivity"], "out": s["out"]})
+                   "sensitivity": s["sensitivity"], "out": s["out"], **extra})
     elif not args.quiet:
         _print_summary(s, out)
     if result.completed == 0 and s["cases"] > 0:
