@@ -150,6 +150,18 @@ def test_a_study_runs_and_its_report_has_the_sources_and_the_convergence(tmp_pat
     assert "R-755" in html and "Convergence" in html and "Wilson" in html
 
 
+def test_a_study_gives_the_same_results_on_two_workers_as_in_one_process(tmp_path):
+    from flexlift.sweep.executors import Processes
+
+    spec = parse_spec(study(samples=4))
+    one = run_sweep(spec, tmp_path / "one", engine=Serial())
+    two = run_sweep(spec, tmp_path / "two", engine=Processes(2))
+    where = ("pid", "host", "elapsed_s", "run_id", "attempts")
+    same = [{i: {k: v for k, v in r.items() if k not in where} for i, r in res.records.items()}
+            for res in (one, two)]
+    assert same[0] == same[1] and len(same[0]) == 4
+
+
 def test_a_sobol_study_gives_indices_and_no_probability(tmp_path):
     spec = parse_spec(study(samples=2, method="sobol",
                             vary={"disturbance.current_m_s": {"dist": "uniform", "low": 0,
@@ -201,7 +213,7 @@ def test_the_sweep_stops_at_the_first_block_end_within_the_half_width(method, tm
     assert max(halfwidths(shorter, ["coordinated"]).values()) > h  # the first such block end
     w = res.summary["outcome_probability"]["unsafe"]
     assert w["low"] <= P_UNSAFE <= w["high"] and w["n"] == n
-    assert res.summary["stopped_at"] == n
+    assert res.summary["stopped_at"] == n == res.summary["cases"]
     # resumable, and a narrower half-width goes on from there
     again = run_sweep(halfwidth_spec(h, method), tmp_path / "o", engine=Serial())
     assert again.ran == 0 and len(again.records) == n

@@ -245,7 +245,7 @@ def render_report(result, summary: dict, rerun: dict) -> str:
     limits = {k: v for k, v in agg.limits_of(spec.base).items()
               if agg.LIMITED[k] not in spec.keys}  # a limit that varies has no one line
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    parts = [f"<h1>Sweep of {_e(spec.base.name)}: {spec.n_cases:,} cases</h1>",
+    parts = [f"<h1>Sweep of {_e(spec.base.name)}: {summary['cases']:,} cases</h1>",
              f'<p class="meta">flexlift {_e(__version__)}, {when}; base {_e(spec.base_ref)} '
              f"(SHA-256 {spec.base.checksum()[:16]}…), SPEC checksum {spec.checksum()[:16]}…; "
              f"engine {_e(result.engine)}; {summary['completed']} completed, "

@@ -392,8 +392,9 @@ def summarize(result: SweepResult) -> dict:
     if spec.halfwidth is not None:
         extra.update(until_halfwidth=spec.halfwidth, block=spec.block,
                      stopped_at=len(records), halfwidths=halfwidths(records, modes))
+    n_cases = spec.n_cases if spec.halfwidth is None else len(records)  # run to a stop
     return {**extra,
-        "cases": spec.n_cases, "completed": result.completed, "failed": result.failed,
+        "cases": n_cases, "completed": result.completed, "failed": result.failed,
         "lost": sum(r["status"] == "lost" for r in records.values()),
         "engine": result.engine, "failure_probability": flat_fp, "sensitivity": flat_sens,
         "out": str(result.out), "skipped": result.skipped, "ran": result.ran,
