@@ -101,6 +101,20 @@ def test_the_user_narrows_and_adds_ranges():
     assert spec.distributions[SOIL].high == 1.1
     assert spec.distributions[bag_key("bag_3")].high == 1.1
     assert "hydro.drag_coefficient" in spec.distributions
+    sources = dict(spec.study.sources)
+    assert sources[SOIL].startswith("NCEL R-755") and sources[SOIL].endswith("given in the SPEC")
+    assert sources["hydro.drag_coefficient"] == "the SPEC"
+    assert "given in the SPEC" not in sources["gas.fill_rate_max_m3_s"]
+
+
+def test_a_study_resumed_from_its_folders_spec_is_the_same_sweep(tmp_path):
+    from flexlift.sweep import load_spec
+
+    spec = parse_spec(study(samples=2))
+    run_sweep(spec, tmp_path / "o", engine=Serial())
+    again = load_spec(tmp_path / "o" / "spec.yaml")
+    assert again.checksum() == spec.checksum() and again.study.sources == spec.study.sources
+    assert run_sweep(again, tmp_path / "o", engine=Serial()).ran == 0
 
 
 @pytest.mark.parametrize("change, needles", [

@@ -157,8 +157,10 @@ class SweepSpec:
                                             for k, d in self.distributions.items()}}
             if self.halfwidth is not None:
                 data["monte_carlo"].update(until_halfwidth=self.halfwidth, block=self.block)
-            if self.study is not None:
+            if self.study is not None:  # what set: fixed stays out of the study's laws
                 data["study"] = self.study.name
+                if self.fixed:
+                    data["set"] = dict(self.fixed)
         return dump_yaml(data)
 
 

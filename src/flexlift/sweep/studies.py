@@ -163,6 +163,7 @@ def study_distributions(name: str, base, user: dict, fixed: dict, where: str):
     laws = default_laws(pinned, wet_t)
     for k in fixed:
         laws.pop(k, None)  # fixed under set: is not varied
+    defaults = dict(laws)
     laws.update(user)
     out: dict[str, Distribution] = {}
     for key, law in laws.items():
@@ -186,9 +187,18 @@ def study_distributions(name: str, base, user: dict, fixed: dict, where: str):
             if bag_key(b.name) not in out:
                 out[bag_key(b.name)] = Distribution(bag_key(b.name), law.kind, law.params,
                                                     law.low, law.high)
-    sources = tuple((k, SOURCES.get(k, "the user's SPEC")) for k in laws)
+    sources = tuple({group_of(k): _source(k, user, defaults) for k in laws}.items())
     bags = tuple(b.model_dump(mode="json", exclude_none=True) for b in pinned.lift.bags)
     return pinned, out, StudyPlan(name, bf0, wet_t, bags, sources)
+
+
+def _source(key: str, user: dict, defaults: dict) -> str:
+    """Where a variable's law comes from: the study's source, and whether the SPEC changed
+    its range (a law the SPEC repeats unchanged, as a resumed sweep's does, keeps its source)."""
+    known = SOURCES.get(group_of(key))
+    if key in user and user[key] != defaults.get(group_of(key)):
+        return f"{known}; the range given in the SPEC" if known else "the SPEC"
+    return known or "the SPEC"
 
 
 def study_changes(plan: StudyPlan, values: dict) -> dict:
