@@ -1,193 +1,182 @@
-"""Throughput of ``flexlift sweep``: a Monte Carlo of 1,000 tanker ascents on 2 cores, against
-running the same cases one by one in a loop of ``flexlift simulate`` processes.
+"""Throughput of ``flexlift sweep`` on 2 cores, against commit 30b642f in the same run (issue 28).
 
-- ``sweep_*``: ``flexlift sweep SPEC --workers 2 --quiet --json`` as a new process, wall time
-  from its start to its exit (imports, the worker pool, the numba load, every case, the
-  netCDF, summary and report); ``cases_per_s`` is cases / that wall time,
-  ``steady_cases_per_s`` the rate between the first and the last case file written (what a
-  longer sweep approaches).
-- ``loop_*``: ``flexlift simulate CASE.yaml --control coordinated --json`` for the first
-  :data:`LOOP_CASES` cases, each a new process, one after another (a shell loop); its mean
-  per process is extrapolated to every case (``loop_extrapolated_s``; stated, not run);
-  ``ratio`` = that / the sweep's wall time. The loop's numbers are checked to equal the
-  sweep's for those cases.
-- ``case_*``: where a case's time goes, in one process over :data:`PROFILE_CASES` cases of the
-  same sweep: the plant built afresh (what ``simulate`` does alone) or reused by the worker
-  (:mod:`flexlift.sweep.plants`), the compiled loop, the results.
+Every sweep is ``flexlift sweep ... --quiet --json --yes`` as a new process with PYTHONPATH on
+one code tree's ``src`` (this tree's, and 30b642f's checked out into a temporary git worktree,
+as ``bench_bags.py`` does), timed from its start to its exit:
 
-The cases: the built-in tanker, coordinated control, to the target held 10 minutes (the
-default ``simulation``), with the breakout factor uniform in [1.25, 1.35] (the 7-bag plan of
-the built-in ``mode_nodes`` layout holds there: wider, some cases need 6 or 8 bags, which that
-layout cannot place, and they would fail at once), T_b lognormal (median 400 s, sigma 0.3),
-C_D normal (1.2 +- 0.1, at least 0.8) and the current triangular on [-0.1, 0.1] m/s, Latin
-hypercube, seed 1. Results go to ``benchmarks/sweep.json`` (``results.json`` belongs to
-``./dev bench``). ``python benchmarks/bench_sweep.py [--quick]``.
+- ``tanker``: the tanker with its nominal plan pinned (``lift.bags`` as the salvage study
+  lists it, a SPEC both trees read), the uncertainties of the study that are scenario keys in
+  both trees: ``lift.breakout_factor`` uniform 1.15-1.45 (the soil's +-50 % on H0), T_b
+  log-uniform 200-800 s, the current +-0.25 m/s, the fill and dump valves +-20 %; LHS, seed 1,
+  ``--workers 2`` (and ``--workers 1`` for the scaling);
+- ``study``: this tree only, ``flexlift sweep --study salvage tanker`` (also every bag's
+  capacity factor and the weight);
+- ``bags73``: ``benchmarks/bags_tanker.yaml`` with ``lift.catalogue_bag.lift_t`` 50 (73
+  bags), T_b, the current and the valves varied as above.
+
+Per sweep: ``wall_s``, ``ascents_per_s`` (cases / wall), ``steady_per_s`` (between the first
+and the last case file written), ``fixed_s`` (wall - cases / steady: the start and the end
+of a sweep: imports, the pool, the numba load, the results), ``case_in_worker_s`` (the mean of
+the cases' own ``elapsed_s``: the case in the loop, as the worker timed it). The load average
+is recorded before and after. ``python benchmarks/bench_sweep.py [--samples 1000]
+[--bags-samples 100] [--no-baseline]``; writes ``benchmarks/sweep.json``.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-OUT = HERE / "sweep.json"
-SAMPLES = 1000
-LOOP_CASES = 5
-PROFILE_CASES = 40
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "benchmarks" / "sweep.json"
+BAGS = ROOT / "benchmarks" / "bags_tanker.yaml"
+BASELINE_COMMIT = "30b642f"
 WORKERS = 2
-SPEC = {
-    "base": "tanker",
-    "control": ["coordinated"],
-    "keep": "summary",
-    "monte_carlo": {
-        "samples": SAMPLES, "seed": 1, "method": "lhs",
-        "vary": {
-            "lift.breakout_factor": {"dist": "uniform", "low": 1.25, "high": 1.35},
-            "seabed.breakout_time_s": {"dist": "lognormal", "median": 400, "sigma": 0.3},
-            "hydro.drag_coefficient": {"dist": "normal", "mean": 1.2, "std": 0.1, "low": 0.8},
-            "disturbance.current_m_s": {"dist": "triangular", "low": -0.1, "mode": 0.0,
-                                        "high": 0.1},
-        },
-    },
-}
+VALVES = {"gas.fill_rate_max_m3_s": {"dist": "uniform", "low": 0.4, "high": 0.6},
+          "gas.purge_rate_max_m3_s": {"dist": "uniform", "low": 1.6, "high": 2.4},
+          "seabed.breakout_time_s": {"dist": "loguniform", "low": 200.0, "high": 800.0},
+          "disturbance.current_m_s": {"dist": "uniform", "low": -0.25, "high": 0.25}}
 
 
-def _flexlift(*args) -> list[str]:
-    return [sys.executable, "-m", "flexlift", *args]
+def _pinned_bags() -> list[dict]:
+    """The tanker's nominal plan as ``lift.bags`` (only keys both trees know)."""
+    sys.path.insert(0, str(ROOT / "src"))
+    from flexlift.loads.clusters import with_default_bag
+    from flexlift.scenario import load_scenario
+    from flexlift.sweep.studies import pin_plan
+
+    pinned = pin_plan(with_default_bag(load_scenario("tanker")), "bench")[0]
+    return [b.model_dump(mode="json", exclude_none=True, exclude={"count"})
+            for b in pinned.lift.bags]
 
 
-def _sweep(spec_file: Path, out: Path) -> dict:
+def _specs(folder: Path, samples: int, bags_samples: int) -> dict[str, Path]:
+    tanker = {"base": "tanker", "control": ["coordinated"], "keep": "summary",
+              "set": {"lift.bags": _pinned_bags()},
+              "monte_carlo": {"samples": samples, "seed": 1, "method": "lhs", "vary": {
+                  "lift.breakout_factor": {"dist": "uniform", "low": 1.15, "high": 1.45},
+                  **VALVES}}}
+    text = BAGS.read_text().replace("    lift_t: 565.0", "    lift_t: 50.0")
+    (folder / "bags73_base.yaml").write_text(text.replace("name: bags_tanker", "name: bags73"))
+    bags73 = {"base": "bags73_base.yaml", "control": ["decentralized"], "keep": "summary",
+              "monte_carlo": {"samples": bags_samples, "seed": 1, "method": "lhs",
+                              "vary": dict(VALVES)}}
+    out = {}
+    for name, data in (("tanker", tanker), ("bags73", bags73)):
+        out[name] = folder / f"{name}.yaml"
+        out[name].write_text(yaml.safe_dump(data, sort_keys=False))
+    return out
+
+
+def _sweep(src: Path, args: list[str], out: Path, timeout: float) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(src), MPLBACKEND="Agg")
+    shutil.rmtree(out, ignore_errors=True)
     t0 = time.perf_counter()
-    proc = subprocess.run(_flexlift("sweep", str(spec_file), "--workers", str(WORKERS),
-                                    "--out", str(out), "--quiet", "--json", "--yes"),
-                          capture_output=True, text=True, check=True)
+    proc = subprocess.run([sys.executable, "-m", "flexlift", "sweep", *args, "--out", str(out),
+                           "--quiet", "--json", "--yes"], env=env, capture_output=True,
+                          text=True, timeout=timeout)
     wall = time.perf_counter() - t0
+    if proc.returncode:
+        return {"error": proc.stderr[-1500:], "rc": proc.returncode}
     j = json.loads(proc.stdout)
-    stamps = sorted(p.stat().st_mtime for p in (out / "cases").glob("case_*.json"))
-    records = [json.loads(p.read_text()) for p in sorted((out / "cases").glob("case_*.json"))]
-    worker_s = [r["elapsed_s"] for r in records if r.get("elapsed_s") is not None]
-    return {"sweep_wall_s": round(wall, 2), "sweep_cases": j["cases"],
-            "sweep_completed": j["completed"], "sweep_failed": j["failed"],
-            "sweep_engine": j["engine"],
-            "cases_per_s": round(j["cases"] / wall, 2),
-            "steady_cases_per_s": round((len(stamps) - 1) / (stamps[-1] - stamps[0]), 2),
-            "worker_case_mean_s": round(sum(worker_s) / len(worker_s), 4),
-            "failure_probability_all": j["failure_probability"]["all_criteria"]}
+    files = sorted((out / "cases").glob("case_*.json"))
+    stamps = sorted(p.stat().st_mtime for p in files)
+    worker = [json.loads(p.read_text()).get("elapsed_s") for p in files]
+    worker = [w for w in worker if w is not None]
+    n = j["cases"]
+    steady = (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 2 else None
+    shutil.rmtree(out, ignore_errors=True)
+    return {"cases": n, "completed": j["completed"], "failed": j["failed"],
+            "wall_s": round(wall, 2), "ascents_per_s": round(n / wall, 2),
+            "steady_per_s": round(steady, 2) if steady else None,
+            "fixed_s": round(wall - n / steady, 2) if steady else None,
+            "case_in_worker_s": round(sum(worker) / len(worker), 4) if worker else None,
+            "p_fail": j["failure_probability"].get("all_criteria", {}).get("p")}
 
 
-def _loop(spec, out: Path, tmp: Path, n: int) -> dict:
-    from flexlift.sweep.cases import case_name, case_scenario, make_cases
+def measure_tree(src: Path, specs: dict, samples: int, work: Path, own: bool) -> dict:
+    warm = yaml.safe_load(specs["tanker"].read_text())
+    warm["monte_carlo"]["samples"] = 2
+    (work / "warm.yaml").write_text(yaml.safe_dump(warm, sort_keys=False))
+    # numba's cache of this tree filled first (a fresh worktree compiles the loop once)
+    _sweep(src, [str(work / "warm.yaml"), "--workers", "1"], work / "o", 3600)
+    out = {"tanker": _sweep(src, [str(specs["tanker"]), "--workers", str(WORKERS)],
+                            work / "o", 7200)}
+    one = dict(samples=max(20, samples // 4))
+    data = yaml.safe_load(specs["tanker"].read_text())
+    data["monte_carlo"]["samples"] = one["samples"]
+    single = work / "tanker1.yaml"
+    single.write_text(yaml.safe_dump(data, sort_keys=False))
+    out["tanker_workers1"] = _sweep(src, [str(single), "--workers", "1"], work / "o", 7200)
+    if own:
+        out["study"] = _sweep(src, ["tanker", "--study", "salvage", "--samples", str(samples),
+                                    "--workers", str(WORKERS)], work / "o", 7200)
+    out["bags73"] = _sweep(src, [str(specs["bags73"]), "--workers", str(WORKERS)], work / "o",
+                           7200)
+    a, b = out["tanker"].get("steady_per_s"), out["tanker_workers1"].get("steady_per_s")
+    out["two_over_one_worker"] = round(a / b, 2) if a and b else None
+    return out
 
-    cases = make_cases(spec)[:n]
-    times, same = [], True
-    for case in cases:
-        path = tmp / f"{case_name(spec, case.index)}.yaml"
-        path.write_text(case_scenario(spec, case).to_yaml())
-        t0 = time.perf_counter()
-        proc = subprocess.run(_flexlift("simulate", str(path), "--control", "coordinated",
-                                        "--json"), capture_output=True, text=True, check=True)
-        times.append(time.perf_counter() - t0)
-        got = json.loads(proc.stdout)
-        rec = json.loads((out / "cases" / f"{path.stem}.json").read_text())
-        want = rec["results"]["coordinated"]["headline"]
-        same &= all(got[k] == want[k] for k in ("max_ascent_velocity_ms", "max_pitch_deg",
-                                                "max_bending_moment_MNm", "end_time_s"))
-    mean = sum(times) / len(times)
-    return {"loop_processes_timed": len(times), "loop_process_s": [round(t, 3) for t in times],
-            "loop_mean_process_s": round(mean, 3),
-            "loop_extrapolated_s": round(mean * spec.n_cases, 1),
-            "loop_cases_per_s": round(1 / mean, 3), "loop_results_equal_sweep": bool(same)}
+
+def _baseline_tree(tmp: Path) -> Path | None:
+    if shutil.which("git") is None:
+        return None
+    wt = tmp / "baseline"
+    res = subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt),
+                          BASELINE_COMMIT], capture_output=True)
+    return wt if res.returncode == 0 else None
 
 
-def _profile(spec, n: int) -> dict:
-    """Mean per case, in this process: a fresh plant, a reused one, the loop, the results."""
-    import flexlift.ascent.loop as loop
-    from flexlift.ascent import simulate
-    from flexlift.ascent.plant import coupled_plant
-    from flexlift.sweep import plants
-    from flexlift.sweep.cases import case_scenario, make_cases
-
-    cases = [case_scenario(spec, c) for c in make_cases(spec)[:n]]
-    simulate(cases[0], control="coordinated")  # load the compiled code
-    spent = {"kernel": 0.0, "result": 0.0}
-    real_advance, real_build = loop.kernel.advance, loop.build_result
-
-    def advance(*a):
-        t = time.perf_counter()
-        try:
-            return real_advance(*a)
-        finally:
-            spent["kernel"] += time.perf_counter() - t
-
-    def build(*a):
-        t = time.perf_counter()
-        try:
-            return real_build(*a)
-        finally:
-            spent["result"] += time.perf_counter() - t
-
-    fresh = reused = plant_fresh = plant_reused = 0.0
-    loop.kernel.advance, loop.build_result = advance, build
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=200, help="tanker cases (issue 28: 1000)")
+    ap.add_argument("--bags-samples", type=int, default=40, help="73-bag cases")
+    ap.add_argument("--no-baseline", action="store_true")
+    ap.add_argument("--out", default=str(OUT))
+    args = ap.parse_args(argv)
+    tmp = Path(tempfile.mkdtemp(prefix="flexlift-bench-sweep-"))
+    result: dict = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                    "samples": args.samples, "bags_samples": args.bags_samples,
+                    "workers": WORKERS, "cores": os.cpu_count(),
+                    "load_before": [round(x, 2) for x in os.getloadavg()]}
+    base = None
     try:
-        for s in cases:
-            t = time.perf_counter()
-            coupled_plant(s)
-            plant_fresh += time.perf_counter() - t
-            t = time.perf_counter()
-            simulate(s, control="coordinated")
-            fresh += time.perf_counter() - t
-        spent = dict.fromkeys(spent, 0.0)
-        for s in cases:
-            t = time.perf_counter()
-            p = plants.plant_for(s, "coordinated")
-            plant_reused += time.perf_counter() - t
-            simulate(s, control="coordinated", plant=p)
-            reused += time.perf_counter() - t
+        specs = _specs(tmp, args.samples, args.bags_samples)
+        t0 = time.perf_counter()
+        result["current"] = measure_tree(ROOT / "src", specs, args.samples, tmp, True)
+        result["load_mid"] = [round(x, 2) for x in os.getloadavg()]
+        base = None if args.no_baseline else _baseline_tree(tmp)
+        result["baseline_commit"] = BASELINE_COMMIT if base else None
+        if base is not None:
+            result["baseline"] = measure_tree(base / "src", specs, args.samples, tmp, False)
+            for k in ("tanker", "bags73"):
+                c, b = result["current"][k], result["baseline"][k]
+                if c.get("wall_s") and b.get("wall_s"):
+                    result[f"speedup_{k}"] = {
+                        "end_to_end": round(b["wall_s"] / c["wall_s"], 2),
+                        "steady": (round(c["steady_per_s"] / b["steady_per_s"], 2)
+                                   if c.get("steady_per_s") and b.get("steady_per_s") else None),
+                        "case_in_worker": round(b["case_in_worker_s"] / c["case_in_worker_s"],
+                                                2)}
+        result["wall_s"] = round(time.perf_counter() - t0, 1)
     finally:
-        loop.kernel.advance, loop.build_result = real_advance, real_build
-    ms = 1000.0 / n
-    return {"case_profiled": n, "case_simulate_fresh_plant_ms": round(fresh * ms, 1),
-            "case_simulate_reused_plant_ms": round(reused * ms, 1),
-            "case_plant_fresh_ms": round(plant_fresh * ms, 2),
-            "case_plant_reused_ms": round(plant_reused * ms, 2),
-            "case_kernel_ms": round(spent["kernel"] * ms, 1),
-            "case_result_ms": round(spent["result"] * ms, 1),
-            "case_cache": plants.stats()}
-
-
-def run(quick: bool = False) -> dict:
-    from flexlift.sweep import parse_spec
-
-    samples = 100 if quick else SAMPLES
-    data = json.loads(json.dumps(SPEC))
-    data["monte_carlo"]["samples"] = samples
-    spec = parse_spec(data)
-    t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory() as d:
-        tmp = Path(d)
-        import yaml
-
-        spec_file = tmp / "spec.yaml"
-        spec_file.write_text(yaml.safe_dump(data, sort_keys=False))
-        load_before = os.getloadavg()
-        res = {"samples": samples, "workers": WORKERS, "cores": os.cpu_count(),
-               "load_average_before": [round(x, 2) for x in load_before]}
-        res.update(_sweep(spec_file, tmp / "out"))
-        res.update(_loop(spec, tmp / "out", tmp, 3 if quick else LOOP_CASES))
-        res.update(_profile(spec, 10 if quick else PROFILE_CASES))
-    res["ratio"] = round(res["loop_extrapolated_s"] / res["sweep_wall_s"], 1)
-    res["load_average_after"] = [round(x, 2) for x in os.getloadavg()]
-    res["wall_s"] = round(time.perf_counter() - t0, 1)
-    OUT.write_text(json.dumps({"date": time.strftime("%Y-%m-%d"), "sweep": res}, indent=2) + "\n")
-    return res
+        if base is not None:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base)],
+                           capture_output=True)
+        shutil.rmtree(tmp, ignore_errors=True)
+    result["load_after"] = [round(x, 2) for x in os.getloadavg()]
+    Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
+    return result
 
 
 if __name__ == "__main__":
-    out = run(quick="--quick" in sys.argv[1:])
-    json.dump(out, sys.stdout, indent=2)
-    sys.stdout.write("\n")
+    print(json.dumps(main(), indent=1))

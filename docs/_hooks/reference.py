@@ -281,12 +281,22 @@ SWEEP_TOP = {
              "or `monte_carlo`"),
     "monte_carlo": ("", "`samples`, `seed`, `method`, `vary` (below). Either `grid` or "
                     "`monte_carlo`"),
+    "study": ("none", "a ready uncertainty study (`salvage`): its laws, each with its source, "
+              "and the plan pinned; `monte_carlo.vary` narrows, widens or adds laws "
+              "([guide](../guide/sweeps.md#studies))"),
 }
 SWEEP_MC = {
     "samples": ("required", "whole number ≥ 1: the number of cases"),
     "seed": ("0", "0..2⁶³−1: `numpy.random.SeedSequence(seed)` draws every case"),
-    "method": ("`lhs`", "`lhs` (Latin hypercube, `scipy.stats.qmc`) or `random`"),
+    "method": ("`lhs`", "`lhs` (Latin hypercube, `scipy.stats.qmc`), `random`, or `sobol` "
+               "(Saltelli's design, SALib: `samples` base samples, samples × (keys + 2) cases, "
+               "Sobol' indices and no probability)"),
     "vary": ("", "dotted key → a distribution `{dist: …, parameters}` (below)"),
+    "until_halfwidth": ("none", "0 < H < 0.5: stop at the first block's end where every "
+                        "probability's 95 % Wilson half-width is ≤ H (`samples`: the most "
+                        "cases); `lhs` or `random`"),
+    "block": ("100", "cases per block with `until_halfwidth` (an `lhs` block is its own "
+              "hypercube)"),
 }
 
 

@@ -60,6 +60,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    words = sys.argv[1:] if argv is None else list(argv)
+    if next((w for w in words if not w.startswith("-")), None) == "sweep":
+        from flexlift.sweep.executors import start_early  # the workers warm up meanwhile
+
+        start_early(words)
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -6,6 +6,13 @@ finishes: run the same command again after an interruption and only the missing 
 It ends with ``results.nc`` (a ``case`` dimension, the varied keys as coordinates),
 ``summary.json`` and ``report.html``.
 
+``flexlift sweep --study salvage SCENARIO`` runs a ready uncertainty study of the scenario
+(a built-in name or a file): the salvors' uncertainties, each law with its source
+(docs/guide/sweeps.md); ``--method sobol`` gives which of them drives each criterion's margin
+(Sobol' indices), ``--method lhs`` or ``random`` the probabilities, ``--until-halfwidth H``
+stops once every probability is known to +-H (95 %). A SPEC with ``study: salvage`` adds
+or narrows the ranges.
+
 Exit codes: 0 the sweep ran (criteria failing are results, not errors); 1 every case failed
 (the most common failure is printed), a case raised a programming error (its traceback is
 printed), or the Dask scheduler was lost during the sweep (in both, the finished cases are
@@ -31,7 +38,21 @@ from flexlift.sweep.executors import WORKERS_PER_CORE, max_workers
 def add_parser(sub) -> None:
     p = sub.add_parser("sweep", help="a grid or Monte Carlo of ascents: probability of a safe lift",
                        description=help_text(__doc__), formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("spec", help="the SPEC file (YAML: base, control, set, grid or monte_carlo)")
+    p.add_argument("spec", help="the SPEC file (YAML: base, control, set, grid or monte_carlo); "
+                                "with --study, the scenario (a built-in name or a file)")
+    p.add_argument("--study", metavar="NAME", default=None,
+                   help="run the ready uncertainty study NAME of the scenario SPEC (salvage)")
+    p.add_argument("--method", choices=("lhs", "random", "sobol"), default=None,
+                   help="the Monte Carlo's sampling: lhs or random (probabilities), sobol "
+                        "(Sobol' indices: which uncertainty matters)")
+    p.add_argument("--samples", type=checked("--samples", whole(1, 1_000_000)), default=None,
+                   help="cases (sobol: base samples, N x (keys + 2) cases; with "
+                        "--until-halfwidth: the most cases)")
+    p.add_argument("--seed", type=checked("--seed", whole(0, 2**63 - 1)), default=None,
+                   help="the Monte Carlo's seed")
+    p.add_argument("--until-halfwidth", metavar="H", type=float, default=None,
+                   help="stop once every probability's 95 %% half-width is at most H (0 < H < "
+                        "0.5), checked at the end of each block of cases")
     p.add_argument("--workers", type=checked("--workers", whole(1, max_workers()),
                                                     f" ({WORKERS_PER_CORE} per core)"), default=None,
                    help=f"local worker processes, at most {WORKERS_PER_CORE} per core (default: "
@@ -79,13 +100,23 @@ class _Bar:
 
 def _main(args: argparse.Namespace) -> int:
     from flexlift.cli import Terminated
-    from flexlift.sweep import load_spec, run_sweep
+    from flexlift.sweep import run_sweep
     from flexlift.sweep.executors import SchedulerLost, make_engine
     from flexlift.sweep.worker import CaseError, OutsideCases
 
-    spec = load_spec(args.spec, yes=args.yes)
-    out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{Path(args.spec).stem}"
-    engine = make_engine(args.workers, args.scheduler, args.dask_local)
+    engine = None
+    if args.scheduler is None and args.dask_local is None:  # its workers warm up meanwhile
+        engine = make_engine(args.workers, None, None)
+    try:
+        spec = _spec(args)
+    except BaseException:
+        if engine is not None:
+            engine.close(cancel=True)
+        raise
+    stem = Path(args.spec).stem if args.study is None else f"{args.study}-{Path(args.spec).stem}"
+    out = args.out if args.out is not None else Path("flexlift-out") / f"sweep-{stem}"
+    if engine is None:
+        engine = make_engine(args.workers, args.scheduler, args.dask_local)
     try:
         _check_cost(spec, engine.workers, args)
     except BaseException:
@@ -123,9 +154,10 @@ def _main(args: argparse.Namespace) -> int:
     s = result.summary
     if args.json:
         fp = {c: {k: v[k] for k in ("p", "low", "high")} for c, v in s["failure_probability"].items()}
+        extra = {k: s[k] for k in ("sobol", "stopped_at", "halfwidths") if k in s}
         emit_json({"cases": s["cases"], "completed": s["completed"], "failed": s["failed"],
                    "engine": s["engine"], "failure_probability": fp,
-                   "sensitivity": s["sensitivity"], "out": s["out"]})
+                   "sensitivity": s["sensitivity"], "out": s["out"], **extra})
     elif not args.quiet:
         _print_summary(s, out)
     if result.completed == 0 and s["cases"] > 0:
@@ -134,6 +166,21 @@ def _main(args: argparse.Namespace) -> int:
                          f"({n} of {s['cases']}): {msg}\n")
         return 1
     return 0
+
+
+def _spec(args: argparse.Namespace):
+    """The sweep: the SPEC file, or the ready study of a scenario, with the command line's
+    Monte Carlo options over it."""
+    from flexlift.sweep import load_spec, parse_spec
+
+    over = {k: v for k, v in (("method", args.method), ("samples", args.samples),
+                              ("seed", args.seed), ("until_halfwidth", args.until_halfwidth))
+            if v is not None}
+    if args.study is None:
+        return load_spec(args.spec, yes=args.yes, overrides=over)
+    data = {"base": str(args.spec), "study": args.study, "monte_carlo": over}
+    return parse_spec(data, f"study {clean(args.study, 40)} of {clean(str(args.spec), 80)}",
+                      Path.cwd(), args.yes)
 
 
 def _check_cost(spec, workers: int, args) -> None:
@@ -154,6 +201,11 @@ def _rerun(args: argparse.Namespace, out: Path) -> str:
     """The command that resumes this sweep (same SPEC, same folder, same engine)."""
 
     cmd = ["flexlift", "sweep", str(args.spec), "--out", str(out)]
+    if args.study is not None:
+        cmd += ["--study", args.study]
+    for opt in ("method", "samples", "seed", "until_halfwidth"):
+        if getattr(args, opt) is not None:
+            cmd += [f"--{opt.replace('_', '-')}", str(getattr(args, opt))]
     if args.scheduler is not None:
         cmd += ["--scheduler", args.scheduler]
     if args.dask_local is not None:
@@ -168,8 +220,8 @@ def _print_summary(s: dict, out: Path) -> None:
              f"({s['lost']} lost); {s['skipped']} were already finished; {s['elapsed_s']:.1f} s "
              f"on {s['engine']}"]
     for mode, fp in s["by_control"].items():
-        w = fp["all_criteria"]
-        if w["n"]:
+        w = fp.get("all_criteria")
+        if w and w["n"]:
             o = s["outcomes_by_control"][mode]
             lines.append(f"{mode}: probability of failure (unsafe, not achieved or failed to "
                          f"run) {w['p']:.3g} (95 % {w['low']:.3g}-{w['high']:.3g}, "
@@ -177,5 +229,11 @@ def _print_summary(s: dict, out: Path) -> None:
                          f"{o['not_achieved']['failed']} not achieved, {o['failed']['failed']} "
                          f"failed to run); {o['incomplete']['failed']} incomplete (the run "
                          "ended first: not a failure)")
+    for mode, outs in s.get("sobol", {}).items():
+        for name, res in outs.items():
+            drivers = [g for g, v in sorted(res.get("groups", {}).items(),
+                                            key=lambda kv: -kv[1]["ST"]) if v["driver"]]
+            lines.append(f"{mode}: {name}: drivers (total Sobol index, 95 % interval above 0): "
+                         + (", ".join(drivers) or "none"))
     lines.append(f"report: {out / 'report.html'}")
     sys.stdout.write("\n".join(lines) + "\n")

@@ -189,9 +189,10 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
 
     factor = lift.catalogue_bag.capacity_factor  # true gas capacity over the rated one
 
-    def make(name, kind, x, span, node, lift_force):
+    def make(name, kind, x, span, node, lift_force, own_factor=None):
+        f = factor if own_factor is None else own_factor  # a listed bag's own factor
         return Bag(name, kind, float(x), span, node, float(lift_force),
-                   factor * lift_force / (rho * g))
+                   f * lift_force / (rho * g))
 
     bags, layout = _laid_out(scenario, hull, modes, n, per, g, make)
     plan = LiftPlan(dry_weight=dry, wet_weight=wet, breakout_factor=lift.breakout_factor,
@@ -329,7 +330,8 @@ def _explicit_bags(specs, hull: Hull, default_lift: float, g: float, make) -> li
                 near = hull.nearest_node(x)
                 node = near if abs(hull.x_nodes[near] - x) < 1e-9 * L else None
             names = [s.name] if s.count == 1 else [f"{s.name}_{j + 1}" for j in range(s.count)]
-            bags += [make(nm, "external", x, None, node, lift_force) for nm in names]
+            bags += [make(nm, "external", x, None, node, lift_force, s.capacity_factor)
+                     for nm in names]
         else:
             a, b = (float(v) for v in s.span_m)
             if not (0 <= a < b <= L):
@@ -339,7 +341,8 @@ def _explicit_bags(specs, hull: Hull, default_lift: float, g: float, make) -> li
             if s.count != 1:
                 raise InputError(f"lift.bags.{s.name}.count", s.count,
                                  "clusters are of external bags; an internal bag fills its span")
-            bags.append(make(s.name, "internal", 0.5 * (a + b), (a, b), None, lift_force))
+            bags.append(make(s.name, "internal", 0.5 * (a + b), (a, b), None, lift_force,
+                             s.capacity_factor))
     names = [b.name for b in bags]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:

@@ -204,6 +204,9 @@ class BagSpec(_Section):
     node: whole(1, MAX_ELEMENTS + 1) | None = None
     span_m: tuple[real(0, MAX_LENGTH_M), real(0, MAX_LENGTH_M)] | None = None
     lift_t: BagLift | None = None  # default: the plan's modelled lift per bag
+    # this bag's true gas capacity over its rated one (each bag of a cluster); default: the
+    # catalogue bag's capacity_factor (a sweep study draws one per bag)
+    capacity_factor: Annotated[Real, Field(gt=0, le=10)] | None = None
 
     @model_validator(mode="after")
     def _check(self) -> BagSpec:

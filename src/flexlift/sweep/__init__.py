@@ -13,7 +13,20 @@ up to.
 ``run_sweep(load_spec("sweep.yaml"), "out")`` runs (or resumes) a sweep.
 """
 
-from flexlift.sweep.run import SweepResult, run_sweep
-from flexlift.sweep.spec import SweepSpec, load_spec, parse_spec
+import importlib
 
 __all__ = ["SweepResult", "SweepSpec", "load_spec", "parse_spec", "run_sweep"]
+#: where each name lives; imported when first asked for, so that importing a light module of
+#: the package (:mod:`.executors`, to start the worker pool first thing) imports nothing else
+_HOME = {"SweepResult": "run", "run_sweep": "run", "SweepSpec": "spec", "load_spec": "spec",
+         "parse_spec": "spec"}
+
+
+def __getattr__(name: str):
+    if name in _HOME:
+        return getattr(importlib.import_module(f"flexlift.sweep.{_HOME[name]}"), name)
+    raise AttributeError(f"module 'flexlift.sweep' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted([*globals(), *__all__])

@@ -71,14 +71,28 @@ def wilson(failed: int, n: int, z: float = Z95) -> dict:
 
 def spearman(x, y) -> float | None:
     """Spearman's rank correlation (average ranks for ties); None when either is constant."""
-    from scipy.stats import rankdata
-
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     if x.size < 3 or np.ptp(x) == 0 or np.ptp(y) == 0:
         return None
     rx, ry = rankdata(x), rankdata(y)
     rx, ry = rx - rx.mean(), ry - ry.mean()
     return float(np.dot(rx, ry) / math.sqrt(np.dot(rx, rx) * np.dot(ry, ry)))
+
+
+def rankdata(a) -> np.ndarray:
+    """Ranks 1..n, ties given their average rank (``scipy.stats.rankdata``'s default, here
+    without importing ``scipy.stats``)."""
+    a = np.asarray(a, dtype=float)
+    order = np.argsort(a, kind="mergesort")
+    sorted_a = a[order]
+    first = np.r_[True, sorted_a[1:] != sorted_a[:-1]]
+    group = np.cumsum(first) - 1
+    starts = np.flatnonzero(first)
+    ends = np.r_[starts[1:], a.size]
+    mean_rank = (starts + ends + 1) / 2.0  # the average of ranks start+1 .. end
+    out = np.empty(a.size)
+    out[order] = mean_rank[group]
+    return out
 
 
 # --------------------------------------------------------------------------- outcomes
@@ -297,3 +311,29 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Da
     for h, arr in nums.items():
         data[h] = (("case", "control"), arr, {"units": _unit(h), "long_name": f"headline {h}"})
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+# --------------------------------------------------------------------------- convergence
+#: most points of a convergence curve
+CONVERGENCE_POINTS = 40
+
+
+def convergence(records: dict, modes) -> dict:
+    """{mode: {"n": [cases], outcome: [[p, low, high], ...]}}: each probability (the outcomes
+    but safe, and the lift failing) after the first n cases run (by case index), at up to
+    :data:`CONVERGENCE_POINTS` values of n spaced geometrically, the last all of them."""
+    out = {}
+    for mode in modes:
+        kinds = [outcome_of(r["results"][mode]) for r in ran(records, mode)]
+        total = len(kinds)
+        if not total:
+            out[mode] = {"n": []}
+            continue
+        ns = sorted({int(round(v)) for v in np.geomspace(1, total, CONVERGENCE_POINTS)} | {total})
+        curve: dict = {"n": ns}
+        for k in [*(o for o in OUTCOMES if o != "safe"), ALL]:
+            hits = np.cumsum([(kind in FAILING) if k == ALL else (kind == k) for kind in kinds])
+            curve[k] = [[w["p"], w["low"], w["high"]]
+                        for w in (wilson(int(hits[n - 1]), n) for n in ns)]
+        out[mode] = curve
+    return out

@@ -4,10 +4,16 @@ Case ``i`` of a Monte Carlo draws its randomness from ``SeedSequence(seed).spawn
 (built directly as ``SeedSequence(seed, spawn_key=(i,))``, the same sequence): its first child
 gives the uniform numbers of plain Monte Carlo, its second the case's noise seed
 (``disturbance.seed``, used when the scenario has force noise; not set when the SPEC fixes or
-varies it). A Latin hypercube stratifies all N cases together (``scipy.stats.qmc``), its
+varies it). A Latin hypercube stratifies all N cases together (``scipy.stats.qmc``'s), its
 design drawn from ``SeedSequence(seed)`` itself. Either way the cases are made here, in the
 process that runs the sweep, so the results are the same whatever the engine and the number
 of workers, and case ``i`` of plain Monte Carlo is the same whatever N.
+
+Run until a half-width (``until_halfwidth``), a Latin hypercube is drawn in blocks of
+``block`` cases, block ``b`` its own hypercube from the third child of ``SeedSequence(seed,
+spawn_key=(b,))``, so a sweep can stop at any block's end and still be made of whole
+hypercubes. ``sobol`` is Saltelli's design (SALib, :mod:`flexlift.sweep.sobol`): N base
+samples, each followed by its rows with one group's values swapped (N x (groups + 2)).
 """
 
 from __future__ import annotations
@@ -62,20 +68,37 @@ def make_cases(spec: SweepSpec) -> list[Case]:
 def uniforms(spec: SweepSpec) -> np.ndarray:
     """(N, number of keys) numbers in [0, 1): a Latin hypercube or plain Monte Carlo."""
     n, d = spec.n_cases, len(spec.distributions)
-    if spec.method == "lhs":
-        from scipy.stats import qmc
+    if spec.method == "sobol":
+        from flexlift.sweep.sobol import saltelli_design
 
-        rng = np.random.default_rng(np.random.SeedSequence(spec.seed))
-        try:
-            sampler = qmc.LatinHypercube(d=d, rng=rng)
-        except TypeError:  # SciPy < 1.15 names it seed
-            sampler = qmc.LatinHypercube(d=d, seed=rng)
-        return sampler.random(n)
+        return saltelli_design(list(spec.distributions), spec.groups, spec.samples, spec.seed)
+    if spec.method == "lhs" and spec.block:
+        blocks = [_lhs(d, min(spec.block, n - b0),
+                       case_sequence(spec.seed, b0 // spec.block).spawn(3)[2])
+                  for b0 in range(0, n, spec.block)]
+        return np.concatenate(blocks) if blocks else np.empty((0, d))
+    if spec.method == "lhs":
+        return _lhs(d, n, np.random.SeedSequence(spec.seed))
     out = np.empty((n, d))
     for i in range(n):
         child = case_sequence(spec.seed, i).spawn(2)[0]
         out[i] = np.random.default_rng(child).random(d)
     return out
+
+
+def _lhs(d: int, n: int, sequence: np.random.SeedSequence) -> np.ndarray:
+    """``scipy.stats.qmc.LatinHypercube(d, rng=default_rng(sequence)).random(n)`` (SciPy
+    >= 1.15, scrambled, strength 1), computed here: the same numbers (the tests compare them)
+    without importing ``scipy.stats`` (0.7 s of a sweep's start). The engine draws from the
+    first child of the generator's seed sequence: a uniform jitter per point, then one
+    shuffle of the strata per dimension."""
+    child = np.random.default_rng(sequence).bit_generator.seed_seq.spawn(1)[0]
+    rng = np.random.Generator(np.random.PCG64(child))
+    jitter = rng.uniform(size=(n, d))
+    perms = np.tile(np.arange(1, n + 1), (d, 1))
+    for i in range(d):
+        rng.shuffle(perms[i, :])
+    return (perms.T - jitter) / n
 
 
 def _noise_seed(seed: int, index: int) -> int:
@@ -86,6 +109,10 @@ def _noise_seed(seed: int, index: int) -> int:
 def changes(spec: SweepSpec, case: Case) -> dict:
     """The dotted changes that turn the base scenario into ``case``'s."""
     out = dict(case.values)
+    if spec.study is not None:
+        from flexlift.sweep.studies import study_changes
+
+        out = study_changes(spec.study, out)
     if case.seed is not None:
         out["disturbance.seed"] = case.seed
     suffix = case_name(spec, case.index)

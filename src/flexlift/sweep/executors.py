@@ -60,6 +60,36 @@ def max_workers() -> int:
     return WORKERS_PER_CORE * local_cores()
 
 
+#: imported (and the compiled ascent loaded) once in the fork server, not per worker; first,
+#: before numpy loads there, one BLAS thread per worker (flexlift._threads)
+PRELOAD = ["flexlift._worker_process", "flexlift.sweep.worker", "flexlift.sweep.warm"]
+
+
+def start_forkserver():
+    """The ``forkserver`` context with the fork server started (once per process): its
+    imports and warm-up (:mod:`.warm`, seconds) run while this process goes on reading the
+    SPEC; the first worker is forked once they are done."""
+    from multiprocessing import forkserver
+
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(PRELOAD)
+    forkserver.ensure_running()
+    return ctx
+
+
+def start_early(argv: list[str]) -> None:
+    """Start the fork server first thing for ``flexlift sweep`` run on local processes (the
+    default), before the command line's own imports: ``argv`` the command's arguments."""
+    if any(a in ("-h", "--help", "--scheduler", "--dask-local") or a.startswith(
+            ("--scheduler=", "--dask-local=", "--workers=1")) for a in argv):
+        return
+    if any(a == "--workers" and b.strip() == "1" for a, b in zip(argv, argv[1:])):
+        return
+    if local_cores() > 1 or "--workers" in argv:
+        with contextlib.suppress(Exception):  # the engine starts it later, or says why not
+            start_forkserver()
+
+
 class SchedulerLost(RuntimeError):
     """The Dask scheduler went away during a sweep (killed, or its machine lost)."""
 
@@ -124,11 +154,7 @@ class Processes:
     def __init__(self, workers: int):
         self.workers = int(workers)
         self.window = 2 * self.workers
-        self._ctx = multiprocessing.get_context("forkserver")
-        # imported (and the compiled ascent loaded) once in the fork server, not per worker;
-        # first, before numpy loads there, one BLAS thread per worker (flexlift._threads)
-        self._ctx.set_forkserver_preload(["flexlift._worker_process", "flexlift.sweep.worker",
-                                          "flexlift.sweep.warm"])
+        self._ctx = start_forkserver()
         self._alive_r, self._alive_w = self._ctx.Pipe(duplex=False)  # see _init_worker
         self._pool = self._new()
 

@@ -114,3 +114,22 @@ def tornado(headline_sensitivity: dict, mode: str, keys):
     ax.set_xlabel("Spearman rank correlation with the headline number")
     fig.legend(loc="upper center", ncol=len(names))
     return fig
+
+
+def convergence(curve: dict):
+    """Each probability against the number of cases, its 95 % Wilson interval shaded."""
+    ns = np.asarray(curve.get("n", []), dtype=float)
+    names = [k for k in curve if k != "n"]
+    if ns.size < 2 or not names:
+        return None
+    fig, ax = new_figure(1, 1, (7.5, 3.6), left=0.1)
+    for k in names:
+        a = np.asarray([[np.nan if v is None else v for v in row] for row in curve[k]], float)
+        line, = ax.plot(ns, a[:, 0], label=k.replace("_", " "))
+        ax.fill_between(ns, a[:, 1], a[:, 2], color=line.get_color(), alpha=0.15, lw=0)
+    ax.set_xscale("log")
+    ax.set_xlabel("cases")
+    ax.set_ylabel("probability")
+    ax.set_ylim(0, 1)
+    ax.legend(fontsize=7, ncol=2)
+    return fig

@@ -74,10 +74,68 @@ def _variations(spec) -> str:
         rows = [[f"<code>{_e(k)}</code>", _e(", ".join(map(str, v))), str(len(v))]
                 for k, v in spec.grid.items()]
         return _table(["key", "values", "count"], rows)
-    rows = [[f"<code>{_e(k)}</code>", _e(d.describe())] for k, d in spec.distributions.items()]
-    how = "Latin hypercube" if spec.method == "lhs" else "plain Monte Carlo"
-    return (f'<p>{spec.samples:,} samples, {how}, seed {spec.seed}.</p>'
-            + _table(["key", "distribution"], rows))
+    sources = dict(spec.study.sources) if spec.study is not None else {}
+    from flexlift.sweep.studies import group_of
+
+    rows = [[f"<code>{_e(k)}</code>", _e(d.describe()),
+             _e(sources.get(k, sources.get(group_of(k), "the SPEC")))]
+            for k, d in spec.distributions.items()]
+    how = {"lhs": "Latin hypercube", "random": "plain Monte Carlo",
+           "sobol": "Saltelli's design for Sobol' indices (base samples)"}[spec.method]
+    if spec.method == "lhs" and spec.block:
+        how += f" in blocks of {spec.block} (each its own hypercube)"
+    study = (f" Study <b>{_e(spec.study.name)}</b>: the plan is pinned (the bags as planned for "
+             "the nominal scenario), the world varies." if spec.study is not None else "")
+    return (f'<p>{spec.samples:,} samples, {how}, seed {spec.seed}.{study}</p>'
+            + _table(["key", "distribution", "source"], rows, left=3))
+
+
+def _sobol(summary: dict, mode: str) -> str:
+    """The Sobol' indices of each output, with their bootstrap 95 % half-widths."""
+    parts = ["<p>Sobol' first-order (S1) and total (ST) indices, 95 % bootstrap half-widths; "
+             "a key (all bags' capacity factors as one group) is named a driver only when its "
+             "ST interval excludes zero. Outputs: each criterion's margin to its limit "
+             "(1 - peak / limit) and the arrival time. No probability comes from these rows "
+             "(they are not independent draws): run method lhs or random for them.</p>"]
+    for out, res in summary["sobol"][mode].items():
+        groups = res.get("groups", {})
+        if not groups:
+            parts.append(f"<p><b>{_e(out)}</b>: not estimated ({res['n_used']} whole base "
+                         "samples, or the output does not vary).</p>")
+            continue
+        drivers = [g for g, v in sorted(groups.items(), key=lambda kv: -kv[1]["ST"])
+                   if v["driver"]]
+        rows = [[f"<code>{_e(g)}</code>", f"{v['S1']:.3f} ± {v['S1_conf']:.3f}",
+                 f"{v['ST']:.3f} ± {v['ST_conf']:.3f}", "yes" if v["driver"] else "–"]
+                for g, v in groups.items()]
+        parts.append(f"<p><b>{_e(out)}</b> ({res['n_used']} base samples): drivers "
+                     + (", ".join(f"<code>{_e(d)}</code>" for d in drivers) or "none shown")
+                     + "</p>" + _table(["key or group", "S1", "ST", "driver"], rows))
+    return "".join(parts)
+
+
+def _convergence(summary: dict, mode: str) -> str:
+    """Each probability against the number of cases, with its Wilson interval."""
+    curve = summary.get("convergence", {}).get(mode, {})
+    ns = curve.get("n", [])
+    if not ns:
+        return ""
+    names = [k for k in curve if k != "n"]
+    rows = []
+    for j, n in enumerate(ns):
+        if j % max(1, len(ns) // 10) and j != len(ns) - 1:
+            continue
+        rows.append([str(n)] + [f"{_pct(curve[k][j][0])} ({_pct(curve[k][j][1])} – "
+                                f"{_pct(curve[k][j][2])})" for k in names])
+    stop = ""
+    if summary.get("until_halfwidth") is not None:
+        stop = (f"<p>Run until every 95 % half-width was at most "
+                f"{_pct(summary['until_halfwidth'])} (checked at each block's end, "
+                f"{summary['block']} cases): stopped at {summary['stopped_at']:,} cases.</p>")
+    return (stop + _figure(plots.convergence(curve),
+                           f"Each probability against the number of cases ({mode} control), "
+                           "with its 95 % Wilson interval.")
+            + _table(["cases", *[k.replace("_", " ") for k in names]], rows))
 
 
 #: the outcomes' rows in the probability table (flexlift.ascent.outcome)
@@ -187,24 +245,29 @@ def render_report(result, summary: dict, rerun: dict) -> str:
     limits = {k: v for k, v in agg.limits_of(spec.base).items()
               if agg.LIMITED[k] not in spec.keys}  # a limit that varies has no one line
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    parts = [f"<h1>Sweep of {_e(spec.base.name)}: {spec.n_cases:,} cases</h1>",
+    parts = [f"<h1>Sweep of {_e(spec.base.name)}: {summary['cases']:,} cases</h1>",
              f'<p class="meta">flexlift {_e(__version__)}, {when}; base {_e(spec.base_ref)} '
              f"(SHA-256 {spec.base.checksum()[:16]}…), SPEC checksum {spec.checksum()[:16]}…; "
              f"engine {_e(result.engine)}; {summary['completed']} completed, "
              f"{summary['failed'] - summary['lost']} failed, {summary['lost']} lost; "
              f"{result.skipped} found finished, {result.ran} run now in {result.elapsed_s:.1f} s.</p>"]
-    parts += [_verdict(summary, m) for m in spec.controls]
+    if spec.method != "sobol":
+        parts += [_verdict(summary, m) for m in spec.controls]
     parts += ["<h2>What varies</h2>", _variations(spec)]
     if spec.fixed:
         parts.append("<p>Fixed for every case: " + ", ".join(
             f"<code>{_e(k)} = {_e(v)}</code>" for k, v in spec.fixed.items()) + ".</p>")
     for m in spec.controls:
+        if spec.method == "sobol":
+            parts += [f"<h2>Which uncertainty matters: {_e(m)} control</h2>", _sobol(summary, m)]
+            continue
         parts += [f"<h2>Probability of failure: {_e(m)} control</h2>", _probabilities(summary, m),
                   "<p class='meta'>A case whose numerics failed, or whose values do not make a "
                   "valid scenario (e.g. a lift plan that cannot be laid out), counts as failing "
                   "every criterion and as failed to run; an incomplete case (every limit held, "
                   "the run ended before the target was held) fails the criterion reached target "
                   "but is not a failure of the lift; lost cases are not counted.</p>",
+                  f"<h2>Convergence: {_e(m)} control</h2>", _convergence(summary, m),
                   f"<h2>Influence of the keys: {_e(m)} control</h2>", _influence(summary, m, keys),
                   _figure(plots.tornado(summary["headline_sensitivity"], m, keys),
                           f"Spearman rank correlation of each key with the headline numbers ({m} control): "

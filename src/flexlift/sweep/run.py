@@ -9,6 +9,12 @@ twice); if it dies again it is recorded as lost. A case that raises a programmin
 (:class:`~flexlift.sweep.worker.CaseError`) stops the sweep like Ctrl-C (or any exception,
 such as a lost Dask scheduler: :class:`~flexlift.sweep.executors.SchedulerLost`): the engine
 stops and every finished case stays in the folder for the rerun.
+
+A Monte Carlo with ``until_halfwidth`` H runs block by block (``block`` cases, in order) and
+stops at the first block's end where every probability (each outcome's and the lift
+failing's, per control mode) has a 95 % Wilson half-width of at most H, or at ``samples``;
+its results are those of the cases up to that block's end, whatever else the folder holds,
+so the stop, and the results, are the same on any engine and after any interruption.
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from flexlift import __version__
 from flexlift.errors import clean
 from flexlift.sweep import aggregate as agg
 from flexlift.sweep.cases import Case, case_name, case_scenario, changes, make_cases
+from flexlift.sweep.executors import Serial
 from flexlift.sweep.spec import SweepSpec
 from flexlift.sweep.store import SweepFolder
 from flexlift.sweep.worker import CaseError, Task, run_case
@@ -123,16 +130,29 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
         with SweepFolder.open(out, spec) as folder:
             records = folder.finished(names)
             skipped = len(records)
-            todo = [c for c in cases if c.index not in records]
             if progress is not None:
                 progress(len(records), len(cases), _failures(records))
-            if engine is None and todo:
-                engine = make_engine()
-            if todo:
-                _execute(engine, spec, todo, names, folder, records, folder.inc.run_id,
-                         progress)
+            ran_now = 0
+            if not isinstance(engine, Serial) and len(records) < len(cases):
+                _import_meanwhile()
+            for block in _blocks(spec, cases):
+                todo = [c for c in block if c.index not in records]
+                if engine is None and todo:
+                    engine = make_engine()
+                if todo:
+                    _execute(engine, spec, todo, names, folder, records, folder.inc.run_id,
+                             progress)
+                    ran_now += len(todo)
+                if spec.halfwidth is not None:
+                    upto = block[-1].index + 1
+                    if halfwidth_reached(_prefix(records, upto), spec.controls, spec.halfwidth):
+                        break
+            if spec.halfwidth is not None:
+                cases = cases[:upto]
+                records = _prefix(records, upto)
+                skipped = min(skipped, len(records))
             result = SweepResult(spec, folder.path, getattr(engine, "name", "none"), records,
-                                 skipped, len(todo), round(time.perf_counter() - t0, 3))
+                                 skipped, ran_now, round(time.perf_counter() - t0, 3))
             _write_results(result, cases, names, folder)
             folder.finish()
     except BaseException:
@@ -142,6 +162,57 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
     if engine is not None:
         engine.close()
     return result
+
+
+#: what the results need and the coordinator imports while the workers run the cases
+TAIL_MODULES = ("flexlift.sweep.report", "scipy.io")
+
+
+def _import_meanwhile() -> None:
+    """Import :data:`TAIL_MODULES` (matplotlib, the netCDF writer) in a background thread:
+    the coordinator waits on its workers anyway, so the results are not held up by them."""
+    import importlib
+    import threading
+
+    def load():
+        for name in TAIL_MODULES:
+            try:
+                importlib.import_module(name)
+            except Exception:  # the results import it again, and report any error there
+                log.debug("could not import %s ahead", name, exc_info=True)
+
+    threading.Thread(target=load, name="flexlift-import", daemon=True).start()
+
+
+def _blocks(spec: SweepSpec, cases: list[Case]):
+    """The cases in the blocks at whose ends a sweep run until a half-width may stop (all
+    the cases in one block otherwise)."""
+    if spec.halfwidth is None:
+        yield cases
+        return
+    for b0 in range(0, len(cases), spec.block):
+        yield cases[b0:b0 + spec.block]
+
+
+def _prefix(records: dict, upto: int) -> dict:
+    return {i: r for i, r in records.items() if i < upto}
+
+
+def halfwidths(records: dict, modes) -> dict:
+    """{probability: its 95 % Wilson half-width}: each outcome's but safe, and the lift
+    failing's, per control mode (a name ``mode.outcome``)."""
+    out = {}
+    for m in modes:
+        ws = {**agg.outcome_probability(records, [m])[m],
+              agg.ALL: agg.failure_probability(records, [m])[m][agg.ALL]}
+        for k, w in ws.items():
+            out[f"{m}.{k}"] = 0.5 if w["p"] is None else (w["high"] - w["low"]) / 2
+    return out
+
+
+def halfwidth_reached(records: dict, modes, h: float) -> bool:
+    """Whether every probability's half-width (:func:`halfwidths`) is at most ``h``."""
+    return max(halfwidths(records, modes).values(), default=0.5) <= h
 
 
 #: cases whose cost is estimated to bound a sweep's per-case cost (spread over the sweep)
@@ -308,8 +379,22 @@ def summarize(result: SweepResult) -> dict:
                  "message": failure_message(records[i]), "values": records[i].get("values", {})}
                 for i in sorted(records) if records[i]["status"] != "completed"][:MAX_LISTED]
     warnings = collections.Counter(w for r in records.values() for w in r.get("warnings", []))
-    return {
-        "cases": spec.n_cases, "completed": result.completed, "failed": result.failed,
+    extra = {"convergence": agg.convergence(records, modes)}
+    if spec.method == "sobol":  # its rows are not independent draws: no probability
+        from flexlift.sweep.sobol import sobol_summary
+
+        fp = {m: {} for m in modes}
+        op = {m: {} for m in modes}
+        flat_fp = {}
+        extra = {"sobol": sobol_summary(spec, records)}
+    if spec.study is not None:
+        extra["study"] = {"name": spec.study.name, "sources": dict(spec.study.sources)}
+    if spec.halfwidth is not None:
+        extra.update(until_halfwidth=spec.halfwidth, block=spec.block,
+                     stopped_at=len(records), halfwidths=halfwidths(records, modes))
+    n_cases = spec.n_cases if spec.halfwidth is None else len(records)  # run to a stop
+    return {**extra,
+        "cases": n_cases, "completed": result.completed, "failed": result.failed,
         "lost": sum(r["status"] == "lost" for r in records.values()),
         "engine": result.engine, "failure_probability": flat_fp, "sensitivity": flat_sens,
         "out": str(result.out), "skipped": result.skipped, "ran": result.ran,

@@ -52,8 +52,12 @@ from flexlift.sweep.distributions import Distribution, parse_distribution
 from flexlift.sweep.keys import check_key
 
 MODES = typing.get_args(ControlMode)
-TOP_KEYS = ("base", "control", "keep", "worst", "set", "grid", "monte_carlo")
-MC_KEYS = ("samples", "seed", "method", "vary")
+TOP_KEYS = ("base", "control", "keep", "worst", "set", "grid", "monte_carlo", "study")
+MC_KEYS = ("samples", "seed", "method", "vary", "until_halfwidth", "block")
+#: sampling methods of a Monte Carlo: iid designs give probabilities, sobol gives indices
+METHODS = ("lhs", "random", "sobol")
+#: cases per block of a sweep run until a half-width (an LHS block is its own hypercube)
+BLOCK = 100
 #: more cases than this need ``--yes`` (about 2 hours of tanker ascents on 2 cores)
 LARGE = 100_000
 #: never more cases than this in one sweep (split it)
@@ -73,8 +77,13 @@ class SweepSpec:
     method : ``grid``, ``lhs`` or ``random``
     grid : key -> tuple of values (a grid), else empty
     distributions : key -> :class:`Distribution` (a Monte Carlo), else empty
-    samples, seed : of a Monte Carlo (None for a grid)
+    samples, seed : of a Monte Carlo (None for a grid); of ``sobol``: the base samples N
+        (the cases are N x (groups + 2), :mod:`flexlift.sweep.sobol`); with ``halfwidth``:
+        the most cases
     worst : how many worst cases the report lists
+    study : the :class:`~flexlift.sweep.studies.StudyPlan` of a ready study (or None)
+    halfwidth : stop once every probability's 95 % Wilson half-width is at most this (or None)
+    block : cases per block when run until a half-width (an LHS block is its own hypercube)
     """
 
     source: str
@@ -89,6 +98,9 @@ class SweepSpec:
     samples: int | None
     seed: int | None
     worst: int
+    study: object = None
+    halfwidth: float | None = None
+    block: int | None = None
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -99,7 +111,19 @@ class SweepSpec:
     def n_cases(self) -> int:
         if self.method == "grid":
             return math.prod(len(v) for v in self.grid.values())
+        if self.method == "sobol":
+            return int(self.samples) * (len(self.groups) + 2)
         return int(self.samples)
+
+    @property
+    def groups(self) -> dict[str, list[str]]:
+        """The Sobol groups: {group: its keys} (every bag's capacity factor is one group)."""
+        from flexlift.sweep.studies import group_of
+
+        out: dict[str, list[str]] = {}
+        for k in self.distributions:
+            out.setdefault(group_of(k), []).append(k)
+        return out
 
     def canonical(self) -> dict:
         """What defines the cases and their results: flexlift's version, the base scenario's
@@ -110,7 +134,9 @@ class SweepSpec:
                 "method": self.method, "samples": self.samples, "seed": self.seed,
                 "grid": {k: list(v) for k, v in self.grid.items()},
                 "vary": {k: [d.kind, [list(p) for p in d.params]]
-                         for k, d in self.distributions.items()}}
+                         for k, d in self.distributions.items()},
+                **({"study": self.study.name} if self.study is not None else {}),
+                **({"lhs_block": self.block} if self.block and self.method == "lhs" else {})}
 
     def checksum(self) -> str:
         """SHA-256 of :meth:`canonical`: two sweeps with the same checksum run the same cases."""
@@ -129,10 +155,17 @@ class SweepSpec:
                                    "method": self.method,
                                    "vary": {k: {"dist": d.kind, **dict(d.params)}
                                             for k, d in self.distributions.items()}}
+            if self.halfwidth is not None:
+                data["monte_carlo"].update(until_halfwidth=self.halfwidth, block=self.block)
+            if self.study is not None:  # what set: fixed stays out of the study's laws
+                data["study"] = self.study.name
+                if self.fixed:
+                    data["set"] = dict(self.fixed)
         return dump_yaml(data)
 
 
-def load_spec(path: str | os.PathLike, yes: bool = False) -> SweepSpec:
+def load_spec(path: str | os.PathLike, yes: bool = False, overrides: dict | None = None
+              ) -> SweepSpec:
     """Read and validate the SPEC file ``path`` (keys: ``docs/reference/sweep.md``).
 
     Parameters
@@ -141,6 +174,9 @@ def load_spec(path: str | os.PathLike, yes: bool = False) -> SweepSpec:
         The SPEC file (YAML); a relative ``base`` path in it is relative to its folder.
     yes : bool, optional
         Allow more than :data:`LARGE` cases (100,000; never more than :data:`MAX_CASES`).
+    overrides : dict, optional
+        ``monte_carlo`` entries that replace the SPEC's (the command line's ``--samples``,
+        ``--method``, ``--until-halfwidth``); refused for a grid.
 
     Returns
     -------
@@ -168,6 +204,15 @@ def load_spec(path: str | os.PathLike, yes: bool = False) -> SweepSpec:
     """
     source = clean(os.fspath(path), 120)
     data = load_yaml(reading.read_text(path, source, reading.SPEC), source)
+    if overrides and isinstance(data, dict):
+        if "grid" in data:
+            which = ", ".join(f"--{k.replace('_', '-')}" for k in overrides)
+            raise InputError.from_line(
+                f"{source}: {which} asked of a grid (its cases are its lists' product); "
+                + ("Sobol indices need " if overrides.get("method") == "sobol" else "give ")
+                + "monte_carlo: (samples, seed, method, vary) instead")
+        mc = data.get("monte_carlo")
+        data = {**data, "monte_carlo": {**(mc if isinstance(mc, dict) else {}), **overrides}}
     return parse_spec(data, source, Path(path).parent, yes)
 
 
@@ -196,6 +241,11 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
     worst = data.get("worst", 10)
     if isinstance(worst, bool) or not isinstance(worst, int) or not 0 <= worst <= 1000:
         raise InputError(f"{source}: worst", brief(worst, 40), "a whole number 0..1000")
+    if "study" in data and "grid" in data:
+        raise InputError.from_line(f"{source}: a study is a Monte Carlo; give monte_carlo: "
+                                   "(samples, seed, method) with study:, not grid:")
+    if "study" in data and "monte_carlo" not in data:
+        data = {**data, "monte_carlo": {}}
     if ("grid" in data) == ("monte_carlo" in data):
         raise InputError.from_line(f"{source}: give either grid: (values per key) or "
                                    "monte_carlo: (samples, seed, vary), not "
@@ -203,6 +253,9 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
     common = dict(source=source, base=base, base_ref=str(base_ref), controls=controls, keep=keep,
                   fixed=fixed, worst=worst)
     if "grid" in data:
+        if isinstance(data["grid"], dict) and "method" in data["grid"]:
+            raise InputError.from_line(f"{source}: grid.method: a grid has no sampling method; "
+                                       "Sobol indices need monte_carlo: with method: sobol")
         grid = _grid(data["grid"], fixed, f"{source}: grid")
         grid = {k: tuple(_path(k, v, folder) for v in vs) for k, vs in grid.items()}
         spec = SweepSpec(method="grid", grid=grid, distributions={}, samples=None, seed=None,
@@ -215,10 +268,20 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
     else:
         mc = _mapping(data["monte_carlo"], f"{source}: monte_carlo")
         _only(mc, MC_KEYS, f"{source}: monte_carlo")
+        study = None
+        if "study" in data:
+            from flexlift.sweep.studies import study_distributions
+
+            base, study_dists, study = study_distributions(
+                data["study"], base, _mapping(mc.get("vary"), f"{source}: monte_carlo.vary"),
+                fixed, f"{source}: monte_carlo")
+            common["base"] = base
+            mc = {**mc, "vary": study_dists}
         samples, seed, method, dists = _monte_carlo(mc, base, fixed, f"{source}: monte_carlo",
-                                                    folder, checked)
+                                                    folder, checked, study)
+        halfwidth, block = _halfwidth(mc, method, f"{source}: monte_carlo")
         spec = SweepSpec(method=method, grid={}, distributions=dists, samples=samples, seed=seed,
-                         **common)
+                         study=study, halfwidth=halfwidth, block=block, **common)
         _check_size(spec, yes)
     return spec
 
@@ -341,18 +404,43 @@ def _spaced(d: dict, where: str, whole: bool) -> list:
     return [int(v) for v in np.rint(vals)] if whole else [float(v) for v in vals]
 
 
+def _halfwidth(mc: dict, method: str, where: str) -> tuple[float | None, int | None]:
+    """(the half-width to stop at, the block size), both None when not asked for."""
+    h = mc.get("until_halfwidth")
+    if h is None:
+        if "block" in mc:
+            raise InputError.from_line(f"{where}.block: blocks are for until_halfwidth; give it "
+                                       "too or remove block")
+        return None, None
+    if isinstance(h, bool) or not isinstance(h, int | float) or not 0 < h < 0.5:
+        raise InputError(f"{where}.until_halfwidth", brief(h, 40), "a probability's 95 % "
+                         "half-width, above 0 and below 0.5 (e.g. 0.01)")
+    if method == "sobol":
+        raise InputError.from_line(f"{where}.until_halfwidth: the Sobol design's rows give no "
+                                   "probabilities; stop at a half-width with method lhs or "
+                                   "random")
+    block = mc.get("block", BLOCK)
+    if isinstance(block, bool) or not isinstance(block, int) or not 1 <= block <= MAX_CASES:
+        raise InputError(f"{where}.block", brief(block, 40), f"a whole number 1..{MAX_CASES:,}")
+    return float(h), block
+
+
 def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path | None = None,
-                 checked: set | None = None):
-    samples = mc.get("samples")
+                 checked: set | None = None, study=None):
+    samples = mc.get("samples", 1000 if study is not None else None)
     if isinstance(samples, bool) or not isinstance(samples, int) or samples <= 0:
         raise InputError(f"{where}.samples", brief(samples, 40), "a whole number >= 1")
     seed = mc.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise InputError(f"{where}.seed", brief(seed, 40), "a whole number 0..2^63-1")
     method = mc.get("method", "lhs")
-    if method not in ("lhs", "random"):
+    if method not in METHODS:
         raise InputError(f"{where}.method", brief(method, 40), "lhs (Latin hypercube, "
-                         "scipy.stats.qmc) or random (plain Monte Carlo)")
+                         "scipy.stats.qmc), random (plain Monte Carlo) or sobol (Saltelli's "
+                         "design for Sobol indices, SALib)")
+    if study is not None:  # the study's laws, already parsed and checked
+        _check_study_ends(base, study, mc["vary"], where)
+        return samples, seed, method, dict(mc["vary"])
     vary = _mapping(mc.get("vary"), f"{where}.vary")
     if not vary:
         raise InputError.from_line(f"{where}.vary: give at least one key with its "
@@ -370,6 +458,16 @@ def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path
             _check_files(_changed(base, {key: v}, at), at, set() if checked is None else checked)
         dists[key] = dist
     return samples, seed, method, dists
+
+
+def _check_study_ends(base: Scenario, study, dists: dict, where: str) -> None:
+    """Every variable of a study at its low ends, then its high ends, must make a valid
+    scenario (e.g. a breakout factor within its range)."""
+    from flexlift.sweep.studies import study_changes
+
+    for end, u in (("low", 0.0), ("high", 1.0 - 1e-16)):
+        values = {k: d.ppf([u])[0] for k, d in dists.items()}
+        _changed(base, study_changes(study, values), f"{where}: the laws' {end} ends")
 
 
 def _check_size(spec: SweepSpec, yes: bool) -> None:

@@ -17,7 +17,7 @@ A record (JSON-ready)::
                                  "outcome": "safe" | "unsafe" | "not_achieved" |
                                             "incomplete" | "failed", "cause": "...",
                                  "criteria": {...}, "headline": {...}, "reasons": {...},
-                                 "events": [...],
+                                 "events": [...], "arrival_s": 3900.1 | None,
                                  "scenario_checksum": "..."}},
      "warnings": [...], "elapsed_s": 0.14, "pid": 1234, "host": "..."}
 
@@ -199,5 +199,16 @@ def _digest(result) -> dict:
     outcome = result.outcome
     return {"outcome": outcome.get("kind"), "cause": outcome.get("cause"),
             "criteria": dict(result.criteria), "headline": dict(result.headline),
-            "reasons": dict(result.reasons), "events": events,
+            "reasons": dict(result.reasons), "events": events, "arrival_s": _arrival(result),
             "scenario_checksum": result.dataset.attrs.get("scenario_checksum")}
+
+
+def _arrival(result) -> float | None:
+    """When the last bag first came within the tolerance of the target [s]; None unless
+    every bag did."""
+    import numpy as np
+
+    arr = getattr(result.dataset, "arrival_time", None)
+    if arr is None or arr.size == 0 or not np.all(np.isfinite(arr.values)):
+        return None
+    return round(float(np.max(arr.values)), 3)
