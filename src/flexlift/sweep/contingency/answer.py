@@ -1,7 +1,9 @@
 """The answer of one single-failure case, from its run: the outcome, the peaks against their
 limits, the breach and the resettling, and the reason in one line.
 
-Once the hull's pitch or the structure's slope passes ``limits.slope_validity_deg`` the
+While the run stays within the model's validity the peaks are the run's own headline numbers
+(``flexlift simulate`` gives the same); the sling force is the recorded rows' largest over the
+bag's design load (its full true lift). Once the hull's pitch or the structure's slope passes ``limits.slope_validity_deg`` the
 small-deflection model is outside its validity: the case is unsafe from then on, and a peak
 reached later is reported as beyond the model's validity (``None`` with ``*_beyond`` true),
 not as a number; the peaks before that moment are kept.
@@ -23,6 +25,9 @@ from flexlift.sweep.worker import Task, run_case
 
 #: the answer's numbers that can be beyond the model's validity
 PEAKS = ("up_ms", "down_ms", "pitch_deg", "sling_ratio", "utilisation")
+#: the answer's peaks that are the run's headline numbers when the whole run is valid
+HEADLINE = {"up_ms": "max_ascent_velocity_ms", "down_ms": "max_descent_velocity_ms",
+            "pitch_deg": "max_pitch_deg", "utilisation": "max_utilisation"}
 #: the longest reason kept [characters]
 REASON_CHARS = 200
 
@@ -114,6 +119,11 @@ def case_answer(result: dict, ds, scenario, mode: str) -> dict:
     end = float(ds.time.values[-1])
     t_v = validity_time(ds, scenario.limits.slope_validity_deg)
     valid = _peaks(ds, scenario, capacity, faults, end if t_v is None else t_v, sep)
+    if t_v is None:  # the whole run is valid: the run's own maxima, taken at every step
+        h = result.get("headline", {})
+        for k, name in HEADLINE.items():
+            if h.get(name) is not None:
+                valid[k] = h[name]
     out = dict(valid)
     if t_v is not None:
         whole = _peaks(ds, scenario, capacity, faults, end, sep)
