@@ -181,3 +181,18 @@ def test_the_command_prints_the_count_writes_json_and_the_report(tmp_path):
                          "--no-margin", "--json"], capture_output=True, text=True, timeout=300)
     assert p2.returncode == p.returncode
     assert json.loads(p2.stdout)["cases"] == s["cases"]
+
+
+def test_flexlift_run_has_a_contingency_stage(tmp_path):
+    """``flexlift run --stages loads,contingency``: the study in contingency/, its verdict in
+    the run's summary and report, its failures' table as CSV."""
+    from flexlift.output.folders import output_folder
+    from flexlift.sweep.contingency.stage import run_stage
+
+    with output_folder(tmp_path / "run", "run") as tmp:
+        o = run_stage(clusters(6), tmp, engine=Serial(), kinds=["bag_rupture"],
+                      phases=["mid"], margins=False)
+    assert o.name == "contingency" and o.criteria == {"single_failure_tolerant": False}
+    assert o.summary["n_cases"] == len(list((tmp_path / "run" / "contingency" / "rerun").iterdir()))
+    csv = (tmp_path / "run" / "tables" / "contingency_failures.csv").read_text()
+    assert csv.count("\n") == min(len(o.summary["failures"]), 20) + 1
