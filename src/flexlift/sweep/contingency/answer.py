@@ -44,6 +44,9 @@ def run_fault_case(task: Task) -> tuple[dict, dict]:
             continue
         scenario = task.base.with_changes(**task.changes)
         res["answer"] = case_answer(res, ds, scenario, mode)
+        # the case's scenario file, written as the worker's (parallel) work: the coordinator
+        # only saves it as the rerun file
+        record["scenario_yaml"] = scenario.to_yaml()
     return record, {}
 
 

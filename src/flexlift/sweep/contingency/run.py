@@ -15,7 +15,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,7 +22,7 @@ from pathlib import Path
 from flexlift import __version__
 from flexlift.errors import InputError
 from flexlift.sweep import aggregate as agg
-from flexlift.sweep.cases import Case
+from flexlift.sweep.cases import Case, case_name
 from flexlift.sweep.contingency import margin as mg
 from flexlift.sweep.contingency.answer import run_fault_case
 from flexlift.sweep.contingency.cases import KINDS, check_kinds, make_cases, noisy
@@ -133,7 +132,7 @@ def run_contingency(scenario, out, mode: str | None = None, phases=PHASES, times
                  + f" x {len({c.kind for c in cases})} kinds x "
                  f"{len({c.phase for c in cases})} phases")
     spec = study_spec(scenario, mode, cases, f"contingency of {scenario.name}")
-    names = {c.index: f"case_{c.index:0{_width(len(cases))}d}" for c in cases}
+    names = {c.index: case_name(spec, c.index) for c in cases}
     records: dict = {}
     try:
         with SweepFolder.open(out, spec) as folder:
@@ -151,10 +150,10 @@ def run_contingency(scenario, out, mode: str | None = None, phases=PHASES, times
             margin = {}
             if margins:
                 margin, engine = _margins(engine, spec, cases, answers, folder, scenario, mode)
-            summary = _summary(scenario, mode, base, found, cases, groups, reps, answers,
-                               margin, records, plain_s, time.perf_counter() - t0,
+            summary = _summary(scenario, mode, base, found, cases, names, groups, reps,
+                               answers, margin, records, plain_s, time.perf_counter() - t0,
                                getattr(engine, "name", "none"), folder.path)
-            _write(folder, summary, spec, cases, names)
+            _write(folder, summary, spec, cases, names, records)
             folder.finish()
     except BaseException:
         if engine is not None:
@@ -166,6 +165,7 @@ def run_contingency(scenario, out, mode: str | None = None, phases=PHASES, times
 
 
 def _width(n: int) -> int:
+    """Digits of the margin runs' case names (their indices follow the ``n`` cases')."""
     return max(4, len(str(max(n * (1 + mg.MAX_RUNS), 1))))
 
 
@@ -225,14 +225,14 @@ def _margins(engine, spec, cases, answers, folder, scenario, mode):
     return out, engine
 
 
-def _summary(scenario, mode, base, found, cases, groups, reps, answers, margin, records,
-             plain_s, elapsed, engine, out) -> dict:
+def _summary(scenario, mode, base, found, cases, names, groups, reps, answers, margin,
+             records, plain_s, elapsed, engine, out) -> dict:
     limits = agg.limits_of(scenario)
-    names = list(base.criteria)
+    criteria = list(base.criteria)
     rows = []
     for c in cases:
         a = answers[c.index]
-        row = {**c.as_dict(), "case": f"case_{c.index:0{_width(len(cases))}d}",
+        row = {**c.as_dict(), "case": names[c.index],
                "answer": {k: v for k, v in a.items() if k not in ("criteria", "headline")},
                "margin": margin.get(c.index)}
         rows.append(row)
@@ -242,7 +242,7 @@ def _summary(scenario, mode, base, found, cases, groups, reps, answers, margin, 
         a = answers[r["index"]]
         res = {"status": a.get("status") or "completed", "outcome": a["outcome"],
                "criteria": a.get("criteria", {}), "headline": a.get("headline", {})}
-        return agg.severity(res, names, limits)
+        return agg.severity(res, criteria, limits)
 
     fails.sort(key=sev, reverse=True)
     bo = base.outcome
@@ -271,16 +271,20 @@ def _summary(scenario, mode, base, found, cases, groups, reps, answers, margin, 
     }
 
 
-def _write(folder, summary, spec, cases, names) -> None:
+def _write(folder, summary, spec, cases, names, records) -> None:
     from flexlift.plumbing.atomic import write_json, write_text
+    from flexlift.sweep.cases import changes
     from flexlift.sweep.contingency.report import render_report
 
     reruns = {c.index: f"rerun/{names[c.index]}.yaml" for c in cases}
     folder.claim("contingency.json", "report.html", "rerun", *reruns.values())
     base = spec.base
     for c in cases:
-        sc = base.with_changes(faults=[c.fault()], name=_rerun_name(base.name, names[c.index]))
-        write_text(folder.path / reruns[c.index], sc.to_yaml())
+        text = records.get(c.index, {}).get("scenario_yaml")  # the case's own, as it ran
+        if text is None:
+            text = base.with_changes(**changes(spec, Case(c.index, {"faults": [c.fault()]}))
+                                     ).to_yaml()
+        write_text(folder.path / reruns[c.index], text)
     for row in summary["cases"]:
         row["rerun"] = reruns[row["index"]]
     write_json(folder.path / "contingency.json", summary)
@@ -311,11 +315,3 @@ def _histories(summary: dict, base) -> dict:
             if exc.partial is not None:
                 out[i] = exc.partial.dataset
     return out
-
-
-def _rerun_name(base: str, case: str) -> str:
-    return f"{base[: 100 - len(case) - 1]}-{case}"
-
-
-def _finite(x) -> bool:
-    return isinstance(x, int | float) and math.isfinite(x)
