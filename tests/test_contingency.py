@@ -196,3 +196,32 @@ def test_flexlift_run_has_a_contingency_stage(tmp_path):
     assert o.summary["n_cases"] == len(list((tmp_path / "run" / "contingency" / "rerun").iterdir()))
     csv = (tmp_path / "run" / "tables" / "contingency_failures.csv").read_text()
     assert csv.count("\n") == min(len(o.summary["failures"]), 20) + 1
+
+
+def test_the_same_answers_on_dask_and_a_resumed_study_runs_nothing_again(tmp_path):
+    """The tanker's sling breaks at breakout, with margins: in this process and on a Dask
+    cluster, the same answers and margins; run again into its folder, nothing runs again."""
+    from flexlift.sweep.executors import DaskEngine
+
+    kw = {"kinds": ["sling_break"], "phases": ["breakout"]}
+    serial = study(TANKER, tmp_path / "serial", **kw)
+    dask = study(TANKER, tmp_path / "dask", engine=DaskEngine(local_workers=2, processes=False),
+                 **kw)
+
+    def answers(s):
+        return [(c["bag"], c["answer"], c["margin"]) for c in s["cases"]]
+
+    assert serial["engine"] == "serial" and dask["engine"] == "dask"
+    assert answers(serial) == answers(dask)
+
+    class Refuse:
+        name, workers, window = "refuse", 1, 1
+
+        def submit(self, fn, *args):
+            raise AssertionError("a finished case ran again")
+
+        def close(self, cancel=False):
+            pass
+
+    again = study(TANKER, tmp_path / "serial", engine=Refuse(), **kw)
+    assert answers(again) == answers(serial)
