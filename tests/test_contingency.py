@@ -225,3 +225,24 @@ def test_the_same_answers_on_dask_and_a_resumed_study_runs_nothing_again(tmp_pat
 
     again = study(TANKER, tmp_path / "serial", engine=Refuse(), **kw)
     assert answers(again) == answers(serial)
+
+
+def test_noise_runs_every_bag_and_the_parts_decide_the_kinds():
+    """Without noise one representative per lift point and type; with force or measurement
+    noise every bag; an internal cylinder can only be lost."""
+    from flexlift.sweep.contingency.cases import KINDS, groups, kinds_of, make_cases, noisy
+    from flexlift.sweep.contingency.phases import Phase
+    from flexlift.sweep.plants import plant_for
+
+    sc = clusters(3)
+    plant = plant_for(sc, "decentralized")
+    assert not noisy(sc) and len(groups(plant, False)) == 4 and len(groups(plant, True)) == 12
+    assert noisy(sc.with_changes(**{"disturbance.force_noise_N_m": 100.0}))
+    assert noisy(sc.with_changes(**{"control.height_noise_m": 0.05}))
+    phases = [Phase("mid", 100.0, ""), Phase("pull", None, "not reached")]
+    cases, _ = make_cases(plant, phases, KINDS, all_bags=False)
+    assert len(cases) == 4 * len(KINDS)  # the unreached phase is not run
+    tanker = plant_for(TANKER, "decentralized")
+    cases, _ = make_cases(tanker, phases[:1])
+    assert len(cases) == 4 * len(KINDS) + 3  # 4 external bags, 3 internal ones only lost
+    assert kinds_of(False) == ("bag_rupture",)

@@ -50,13 +50,16 @@ def run_fault_case(task: Task) -> tuple[dict, dict]:
     return record, {}
 
 
-def one_line(text: str) -> str:
-    """``text`` cut to :data:`REASON_CHARS` at a clause boundary where it can."""
+def one_line(text: str, limit: int = REASON_CHARS) -> str:
+    """``text`` cut to ``limit`` characters at a clause boundary where it can, else at a
+    word's."""
     text = clean(str(text), 1000)
-    if len(text) <= REASON_CHARS:
+    if len(text) <= limit:
         return text
-    cut = text[:REASON_CHARS].rfind("; ")
-    return (text[:cut] if cut > 60 else text[:REASON_CHARS - 1]) + " …"
+    cut = text[:limit].rfind("; ")
+    if cut <= 60:
+        cut = text[:limit - 2].rfind(" ")
+    return text[:cut if cut > 0 else limit - 2] + " …"
 
 
 def validity_time(ds, validity_deg: float) -> float | None:
@@ -141,7 +144,7 @@ def case_answer(result: dict, ds, scenario, mode: str) -> dict:
     reason = one_line(cause)
     if t_v is not None:
         outcome = "unsafe"
-        reason = (f"{one_line(cause)[:REASON_CHARS - 70]}; the slope passed "
+        reason = (f"{one_line(cause, REASON_CHARS - 70)}; the slope passed "
                   f"{scenario.limits.slope_validity_deg:g} deg at {t_v:.0f} s: beyond the "
                   "model's validity from then on")
     if outcome == "failed":
