@@ -14,7 +14,7 @@ from flexlift.ascent import simulate
 from flexlift.errors import InputError
 from flexlift.scenario import load_scenario
 from flexlift.sweep.contingency.cases import check_kinds
-from flexlift.sweep.contingency.margin import MAX_RUNS, Bisection, bisect_margin
+from flexlift.sweep.contingency.margin import CAP, MAX_RUNS, Bisection, bisect_margin
 from flexlift.sweep.contingency.run import run_contingency
 from flexlift.sweep.executors import Serial
 
@@ -120,6 +120,11 @@ def test_the_margins_bisection_finds_a_known_threshold_within_its_runs():
     assert (hi - lo) <= 0.0157  # 0.5 / 2^5 after five halvings
     never = bisect_margin(lambda s: False, 1.5)
     assert never["scale"] is None and never["text"] == "> x1.5" and never["runs"] == 1
+    # the default cap: within 1 % of the scale in the six runs
+    cap = CAP["capacity"]
+    m = bisect_margin(lambda s: s >= 1.111, cap)
+    lo, hi = m["bracket"]
+    assert lo < 1.111 <= hi and hi - lo <= 0.01 * hi and m["runs"] <= MAX_RUNS
     # the 1 t tolerance: a plan of 100 t per unit of scale stops at 0.01 (1 t) or earlier
     b = Bisection(1.5, unit_t=100.0)
     while (s := b.next_scale()) is not None:
