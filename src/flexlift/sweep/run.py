@@ -168,7 +168,7 @@ def _failures(records: dict) -> int:
 
 
 def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, progress,
-             fn=run_case, total: int | None = None) -> None:
+             fn=run_case) -> None:
     """Run ``todo`` on ``engine`` (each case a :class:`~flexlift.sweep.worker.Task` given to
     ``fn``, by default :func:`~flexlift.sweep.worker.run_case`), writing each record into
     ``folder`` and ``records`` as it returns; ``progress(done, total, failed)``."""
@@ -176,7 +176,7 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
     suspects: collections.deque[Case] = collections.deque()
     attempts: dict[int, int] = collections.Counter()
     inflight: dict[cf.Future, Case] = {}
-    total = len(names) if total is None else total
+    total = len(names)
     while queue or suspects or inflight:
         # a suspect (its worker died once) runs alone, when nothing else is in flight
         while suspects and not inflight:
