@@ -8,7 +8,12 @@ controller), for any plant:
 - ``supply_failure``: the bag can no longer be filled;
 - ``sensor_drift``: its height reading drifts at ``rate_m_s``;
 - ``sensor_stuck``: its readings hold their last values from then on;
-- ``sensor_dropout``: they hold them for ``duration_s``.
+- ``sensor_dropout``: they hold them for ``duration_s``;
+- ``dump_valve_stuck_closed``: the bag's purge opening is held at 0 from then on;
+- ``fill_valve_stuck_open``: the bag fills at the full rate (``gas.fill_rate_max_m3_s``)
+  whatever its command, until its true capacity; the excess then spills or is relieved.
+
+The stuck valves act at the next control sample (:func:`flexlift.ascent.kernel.stuck_valves`).
 """
 
 from __future__ import annotations
@@ -47,6 +52,10 @@ def apply_fault(fault, t: float, names, switches, control_bags, control_state) -
         sw.supply[i] = 0.0
     elif fault.kind == "sensor_drift":
         sw.drift[i], sw.drift_t0[i] = fault.rate_m_s, t
+    elif fault.kind == "dump_valve_stuck_closed":
+        sw.dump_stuck[i] = True
+    elif fault.kind == "fill_valve_stuck_open":
+        sw.fill_stuck[i] = True
     elif fault.kind == "sensor_stuck":
         sw.frozen[i], sw.frozen_until[i] = True, math.inf
     elif fault.kind == "sensor_dropout":

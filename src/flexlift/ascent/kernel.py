@@ -231,8 +231,22 @@ def control(t, k, plant, controllers, control_state, state, switches, settings):
     for j in range(controllers.bags.size):
         i = controllers.bags[j]
         state.fill[i], state.opening[i] = control_state.fill[j], control_state.opening[j]
+    stuck_valves(controllers, state, switches)
     supply_limit(plant, state, switches)
     return RET_DONE
+
+
+@jit
+def stuck_valves(controllers, state, switches):
+    """Stuck valves override the commands of every bag (controlled or not): a dump valve
+    stuck closed purges nothing; a fill valve stuck open fills at the full rate
+    ``controllers.fill_max`` [m^3/s at local pressure] whatever the command (the gas beyond
+    the bag's true capacity then spills or is relieved, at the end of the step)."""
+    for i in range(state.fill.size):
+        if switches.dump_stuck[i]:
+            state.opening[i] = 0.0
+        if switches.fill_stuck[i]:
+            state.fill[i] = controllers.fill_max
 
 
 @jit

@@ -61,6 +61,8 @@ class Switches(NamedTuple):
     noise: np.ndarray  # (steps, ns) random line load per strip, this chunk's steps [N/m]
     meas_noise: np.ndarray  # (samples, 3, nb) measurement noise of this chunk's samples
     chunk: np.ndarray  # (2,) int: first step / first sample of the noise rows (-1: no noise)
+    dump_stuck: np.ndarray  # (nb,) bool: the dump (purge) valve stuck closed
+    fill_stuck: np.ndarray  # (nb,) bool: the fill valve stuck open (fills at the full rate)
 
 
 class RunState(NamedTuple):
@@ -162,7 +164,7 @@ def new_switches(nb: int, ns: int) -> Switches:
     return Switches(np.ones(nb), np.ones(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb),
                     np.zeros(nb, np.bool_), np.full(nb, math.inf), np.zeros((3, nb)),
                     np.zeros(1), np.zeros((1, ns)), np.zeros((1, 3, nb)),
-                    np.full(2, -1, np.int64))
+                    np.full(2, -1, np.int64), np.zeros(nb, np.bool_), np.zeros(nb, np.bool_))
 
 
 def new_run_state(nr: int, nb: int, ns: int, ng: int) -> RunState:

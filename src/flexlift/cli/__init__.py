@@ -29,7 +29,8 @@ from flexlift import __version__
 from flexlift.errors import LINE_LIMIT, InputError, SimulationError, clean
 
 #: sub-command modules, in the order of the analysis
-COMMANDS = ("run", "modes", "loads", "statics", "reduce", "fuzzy", "simulate", "sweep")
+COMMANDS = ("run", "modes", "loads", "statics", "reduce", "fuzzy", "simulate", "sweep",
+            "contingency")
 
 
 class _Parser(argparse.ArgumentParser):

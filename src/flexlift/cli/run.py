@@ -39,6 +39,11 @@ def _csv_list(kind: str, allowed: tuple[str, ...]):
     return parse
 
 
+#: the stages ``--stages`` may name: the analysis, and the single-failure study (not by
+#: default: it runs every single failure at every phase, flexlift.sweep.contingency)
+CLI_STAGES = (*STAGES, "contingency")
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser(
         "run",
@@ -54,9 +59,10 @@ def add_parser(sub) -> None:
     )
     p.add_argument(
         "--stages",
-        type=_csv_list("stage", STAGES),
+        type=_csv_list("stage", CLI_STAGES),
         default=STAGES,
-        help=f"comma-separated subset of {','.join(STAGES)} (default: all)",
+        help=f"comma-separated subset of {','.join(CLI_STAGES)} (default: "
+        f"{','.join(STAGES)}; contingency: every single failure at every phase)",
     )
     p.add_argument(
         "--control",
@@ -110,6 +116,16 @@ class Progress:
         self._last = pct
 
 
+def _contingency(scenario, tmp: Path, args, progress, k: int):
+    """The single-failure stage, in the scenario's control mode when it is among --control."""
+    from flexlift.sweep.contingency.stage import run_stage
+
+    mode = scenario.control.mode if scenario.control.mode in args.control else args.control[0]
+    progress.stage(k, k, f"Single failures: {mode}")
+    return run_stage(scenario, tmp, control=mode,
+                     progress=lambda f: progress.bar(f, "single failures"))
+
+
 def _main(args: argparse.Namespace) -> int:
     from flexlift.output.plots._style import figures_in_background
 
@@ -126,7 +142,10 @@ def _main(args: argparse.Namespace) -> int:
         # of the imports frozen for the collector, the figures drawn by figure processes
         # while the next stage computes (all complete, and the processes gone, at its end)
         with heap_frozen(), figures_in_background():
-            outputs = run_all(scenario, tmp, args.stages, args.control, progress)
+            stages = tuple(s for s in args.stages if s != "contingency")
+            outputs = run_all(scenario, tmp, stages, args.control, progress)
+            if "contingency" in args.stages:
+                outputs.append(_contingency(scenario, tmp, args, progress, len(stages) + 1))
         as_written, copies = copy_controller_files(scenario, tmp)
         summary = summary_of(scenario, outputs, time.perf_counter() - t0)
         if copies:

@@ -22,6 +22,7 @@ STAGE_TITLES = {
     "reduce": "3. State space and model reduction",
     "fuzzy": "4. Supervisory fuzzy controller",
     "simulate": "5. Controlled ascent",
+    "contingency": "6. Single failures",
 }
 
 _CSS = """
@@ -237,7 +238,7 @@ def _verdict(lift: dict, checks: dict, warnings: list, reasons: dict | None = No
 
 #: the stages a client reads in the body (the plan and its strength, the ascent); the modal
 #: analysis, the reduction and the fuzzy controller are the research appendix
-BODY_STAGES = ("loads", "simulate", "compare")
+BODY_STAGES = ("loads", "simulate", "compare", "contingency")
 
 
 def _limits_table(scenario, stages: list[StageOutput]) -> Table | None:

@@ -468,8 +468,17 @@ class SensorDropout(_Fault):
     duration_s: Duration = 60.0
 
 
+class DumpValveStuckClosed(_Fault):
+    kind: Literal["dump_valve_stuck_closed"]
+
+
+class FillValveStuckOpen(_Fault):
+    kind: Literal["fill_valve_stuck_open"]
+
+
 Fault = Annotated[
-    BagRupture | SlingBreak | SupplyFailure | SensorDrift | SensorStuck | SensorDropout,
+    BagRupture | SlingBreak | SupplyFailure | SensorDrift | SensorStuck | SensorDropout
+    | DumpValveStuckClosed | FillValveStuckOpen,
     Field(discriminator="kind"),
 ]
 

@@ -238,7 +238,11 @@ def _failures(records: dict) -> int:
     return sum(r["status"] != "completed" for r in records.values())
 
 
-def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, progress) -> None:
+def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, progress,
+             fn=run_case) -> None:
+    """Run ``todo`` on ``engine`` (each case a :class:`~flexlift.sweep.worker.Task` given to
+    ``fn``, by default :func:`~flexlift.sweep.worker.run_case`), writing each record into
+    ``folder`` and ``records`` as it returns; ``progress(done, total, failed)``."""
     queue = collections.deque(todo)
     suspects: collections.deque[Case] = collections.deque()
     attempts: dict[int, int] = collections.Counter()
@@ -247,9 +251,9 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
     while queue or suspects or inflight:
         # a suspect (its worker died once) runs alone, when nothing else is in flight
         while suspects and not inflight:
-            _submit(engine, spec, suspects.popleft(), attempts, inflight)
+            _submit(engine, spec, suspects.popleft(), attempts, inflight, fn)
         while queue and not suspects and len(inflight) < engine.window:
-            _submit(engine, spec, queue.popleft(), attempts, inflight)
+            _submit(engine, spec, queue.popleft(), attempts, inflight, fn)
         done, _ = cf.wait(list(inflight), timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
         bug = None
         for f in done:
@@ -280,10 +284,10 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
             check()
 
 
-def _submit(engine, spec, case: Case, attempts, inflight) -> None:
+def _submit(engine, spec, case: Case, attempts, inflight, fn=run_case) -> None:
     attempts[case.index] += 1
     task = Task(case.index, spec.base, changes(spec, case), spec.controls, spec.keep == "histories")
-    inflight[engine.submit(run_case, task)] = case
+    inflight[engine.submit(fn, task)] = case
 
 
 #: how engines report a worker that died under a case (the process killed, the machine lost)

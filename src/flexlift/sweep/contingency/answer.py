@@ -1,0 +1,159 @@
+"""The answer of one single-failure case, from its run: the outcome, the peaks against their
+limits, the breach and the resettling, and the reason in one line.
+
+While the run stays within the model's validity the peaks are the run's own headline numbers
+(``flexlift simulate`` gives the same); the sling force is the recorded rows' largest over the
+bag's design load (its full true lift). Once the hull's pitch or the structure's slope passes ``limits.slope_validity_deg`` the
+small-deflection model is outside its validity: the case is unsafe from then on, and a peak
+reached later is reported as beyond the model's validity (``None`` with ``*_beyond`` true),
+not as a number; the peaks before that moment are kept.
+
+:func:`run_fault_case` is what a sweep engine runs for a case (any executor: a picklable
+function of one :class:`~flexlift.sweep.worker.Task`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from flexlift import constants as C
+from flexlift.errors import clean
+from flexlift.sweep.worker import Task, run_case
+
+#: the answer's numbers that can be beyond the model's validity
+PEAKS = ("up_ms", "down_ms", "pitch_deg", "sling_ratio", "utilisation")
+#: the answer's peaks that are the run's headline numbers when the whole run is valid
+HEADLINE = {"up_ms": "max_ascent_velocity_ms", "down_ms": "max_descent_velocity_ms",
+            "pitch_deg": "max_pitch_deg", "utilisation": "max_utilisation"}
+#: the longest reason kept [characters]
+REASON_CHARS = 200
+
+
+def run_fault_case(task: Task) -> tuple[dict, dict]:
+    """Run one case (:func:`~flexlift.sweep.worker.run_case`) and add to its control mode's
+    result its ``answer`` (:func:`case_answer`); no histories are returned."""
+    record, datasets = run_case(dataclasses.replace(task, histories=True))
+    for mode, res in record["results"].items():
+        ds = datasets.get(mode)
+        if ds is None:
+            res["answer"] = {"outcome": "unsafe", "reason": one_line(res.get("error") or
+                                                                      "the case did not run")}
+            continue
+        scenario = task.base.with_changes(**task.changes)
+        res["answer"] = case_answer(res, ds, scenario, mode)
+        # the case's scenario file, written as the worker's (parallel) work: the coordinator
+        # only saves it as the rerun file
+        record["scenario_yaml"] = scenario.to_yaml()
+    return record, {}
+
+
+def one_line(text: str, limit: int = REASON_CHARS) -> str:
+    """``text`` cut to ``limit`` characters at a clause boundary where it can, else at a
+    word's."""
+    text = clean(str(text), 1000)
+    if len(text) <= limit:
+        return text
+    cut = text[:limit].rfind("; ")
+    if cut <= 60:
+        cut = text[:limit - 2].rfind(" ")
+    return text[:cut if cut > 0 else limit - 2] + " …"
+
+
+def validity_time(ds, validity_deg: float) -> float | None:
+    """The first time [s] the hull's pitch or the structure's slope passes ``validity_deg``."""
+    lim = math.radians(validity_deg)
+    times = []
+    over = np.flatnonzero(np.abs(ds["pitch"].values) > lim)
+    if over.size:
+        times.append(float(ds.time.values[over[0]]))
+    if "slope_largest" in ds:
+        over = np.flatnonzero(ds["slope_largest"].values > lim)
+        if over.size:
+            times.append(float(ds.time_strength.values[over[0]]))
+    return min(times) if times else None
+
+
+def _peaks(ds, scenario, capacity, faults, t_end: float, sep: float | None) -> dict:
+    """The peaks up to ``t_end`` [s]: upward speed of an attached bag point, downward speed
+    once separated [m/s], pitch [deg], sling force over its design load (the bag's full true
+    lift), bending utilisation."""
+    t = ds.time.values
+    keep = t <= t_end
+    v = ds.ascent_velocity.values.copy()
+    for f in faults:
+        if f["kind"] == "sling_break":  # a detached bag's point no longer counts
+            j = list(ds.bag.values).index(f["bag"])
+            v[t >= f["time_s"], j] = 0.0
+    up = float(max(v[keep].max(initial=0.0), 0.0))
+    after = keep & (t >= sep) if sep is not None else np.zeros_like(keep)
+    down = float(max((-v[after]).max(initial=0.0), 0.0))
+    pitch = float(np.degrees(np.abs(ds["pitch"].values[keep]).max(initial=0.0)))
+    rho_g = scenario.environment.seawater_density_kg_m3 * scenario.environment.gravity_m_s2
+    sling = ds.sling_force.values[keep].max(axis=0, initial=0.0) / (capacity * rho_g)
+    j = int(np.argmax(sling))
+    g = scenario.environment.gravity_m_s2
+    util = None
+    if "bending_moment" in ds:
+        from flexlift.ascent.result import section_modulus
+
+        ks = ds.time_strength.values <= t_end
+        Z = section_modulus(scenario, ds.x.values)
+        M = np.abs(ds.bending_moment.values[ks])
+        allow = scenario.hull.allowable_stress_MPa * 1e6
+        util = float((M / Z).max(initial=0.0) / allow)
+    return {"up_ms": round(up, 4), "down_ms": round(down, 4), "pitch_deg": round(pitch, 4),
+            "sling_ratio": round(float(sling[j]), 4), "sling_bag": str(ds.bag.values[j]),
+            "sling_peak_t": round(float(sling[j] * capacity[j] * rho_g / (C.TONNE * g)), 1),
+            "utilisation": None if util is None else round(util, 4)}
+
+
+def case_answer(result: dict, ds, scenario, mode: str) -> dict:
+    """The answer of a case's run (``result`` the worker's digest, ``ds`` its dataset)."""
+    from flexlift.sweep.plants import plant_for
+
+    capacity = np.asarray(plant_for(scenario, mode).bags.capacity, dtype=float)
+    events = result.get("events", [])
+    faults = [f.model_dump() for f in scenario.faults]
+
+    def first(kind):
+        return next((e["time_s"] for e in events if e["kind"] == kind), None)
+
+    sep = first("separation")
+    end = float(ds.time.values[-1])
+    t_v = validity_time(ds, scenario.limits.slope_validity_deg)
+    valid = _peaks(ds, scenario, capacity, faults, end if t_v is None else t_v, sep)
+    if t_v is None:  # the whole run is valid: the run's own maxima, taken at every step
+        h = result.get("headline", {})
+        for k, name in HEADLINE.items():
+            if h.get(name) is not None:
+                valid[k] = h[name]
+    out = dict(valid)
+    if t_v is not None:
+        whole = _peaks(ds, scenario, capacity, faults, end, sep)
+        for k in PEAKS:
+            later = whole[k] is not None and valid[k] is not None and whole[k] > valid[k]
+            out[f"{k}_beyond"] = bool(later)
+            if later:
+                out[k] = None
+    breach, resettle = first("surface_breach"), first("resettle")
+    outcome = result.get("outcome") or "failed"
+    cause = result.get("cause") or result.get("error") or ""
+    reason = one_line(cause)
+    if t_v is not None:
+        outcome = "unsafe"
+        reason = (f"{one_line(cause, REASON_CHARS - 70)}; the slope passed "
+                  f"{scenario.limits.slope_validity_deg:g} deg at {t_v:.0f} s: beyond the "
+                  "model's validity from then on")
+    if outcome == "failed":
+        outcome = "unsafe"
+    out.update(outcome=outcome, reason=reason, validity_end_s=t_v,
+               breach_s=None if breach is None or (t_v is not None and breach > t_v) else breach,
+               breach_beyond=bool(breach is not None and t_v is not None and breach > t_v),
+               resettle_s=resettle, sling_design_t=round(float(
+                   capacity[list(ds.bag.values).index(valid["sling_bag"])]
+                   * scenario.environment.seawater_density_kg_m3 / C.TONNE), 1),
+               end_s=end)
+    return out
