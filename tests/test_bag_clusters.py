@@ -72,6 +72,11 @@ def test_bags_at_one_point_share_a_loop_bag(fifty):
     run = Ascent(sc, P, "decentralized", 10.0, "table")
     assert run.records.bags.nb == 10 and run.state.n.size == 10
     assert run.controllers.weight.sum() == 73
+    run.run()  # after the run: one entry per bag, the record's rows those recorded
+    rec = run.recorder
+    assert run.state.n.size == 73 and run.switches.attached.size == 73
+    assert rec.bag.shape == (int(rec.counts[0]), 12, 73) < (rec.t.size, 12, 73)
+    assert rec.snap_V.shape == (int(rec.counts[1]), 73)
     off = Ascent(sc, P, "decentralized", 10.0, "table", share=False)
     assert off.records.bags.nb == 73 and off.records.bags is P.bags
 
@@ -179,3 +184,42 @@ def test_any_difference_in_the_bag_record_or_controller_splits(fifty):
     pull = C.V_pull.copy()
     pull[int(np.flatnonzero(C.bags == k)[0])] += 1e-9
     assert find_clusters(sc, P, C._replace(V_pull=pull)).first.size == base.first.size + 1
+
+
+def test_results_nc_grows_mode_by_mode_and_reads_every_bag_back(tmp_path):
+    """add_to_netcdf takes the modes already in the file as stored (histories by lift point)
+    and spreads them one variable at a time: every mode, clustered or not, with other bags
+    (the paper's four), written again, reads back exactly; a reader of some variables gets
+    those, the same."""
+    from flexlift.ascent.result import Result
+    from flexlift.output.modesfile import FLOAT32_VARS
+    from flexlift.output.results import add_to_netcdf, load_netcdf
+
+    tanker = load_scenario("tanker")
+    take = [0, 0, 0, 1, 1, 2, 3, 4, 5, 6]  # clusters of 3 and 2 at the first two points
+    runs = []
+    for mode, d in (("decentralized", 60.0), ("coordinated", 80.0)):
+        ds = simulate(tanker, control=mode, duration=d).dataset.isel(bag=take)
+        runs.append(Result(ds.assign_coords(bag=[f"bag_{k}" for k in range(1, 11)])))
+    runs.append(simulate(tanker, control="paper", duration=50.0))
+    import xarray as xr
+
+    path = tmp_path / "r.nc"
+    add_to_netcdf(runs[0], path)
+    add_to_netcdf(runs[1], path)
+    with xr.open_dataset(path, engine="scipy") as f:
+        assert f["height"].dims == ("mode", "row", "point")  # stored by point
+    for r in runs[2:] + runs[:1]:  # read as stored, spread to the bags
+        add_to_netcdf(r, path)
+    for r in runs:
+        back = load_netcdf(path, r.control).dataset
+        assert back.sizes == r.dataset.sizes and set(back.variables) == set(r.dataset.variables)
+        for name, v in r.dataset.variables.items():
+            want = v.values.astype(np.float32) if name in FLOAT32_VARS else v.values
+            np.testing.assert_array_equal(back[name].values, want, err_msg=name)
+            assert back[name].dims == v.dims, name
+    some = load_netcdf(path, "coordinated", variables=("heave", "ascent_velocity")).dataset
+    assert set(some.data_vars) == {"heave", "ascent_velocity"}
+    assert some.attrs == runs[1].dataset.attrs
+    np.testing.assert_array_equal(some.heave.values, runs[1].dataset.heave.values)
+    np.testing.assert_array_equal(some.time.values, runs[1].dataset.time.values)

@@ -154,19 +154,24 @@ def loop_controllers(controllers, cl: Clusters):
     return type(controllers)(**fields)
 
 
-def expand(record, probe, cl: Clusters):
+def expand(record, probe, cl: Clusters, rows: dict[int, int] | None = None):
     """``record`` (a named tuple of the run: the state, the switches, the recorded rows) with
     one entry per bag: every axis that runs over the loop's bags taken at each bag's loop bag.
     ``probe(n)`` builds a record of the same kind for ``n`` bags: the axes whose length
-    changes with ``n`` are the bag axes (so a field added to the record is expanded too)."""
+    changes with ``n`` are the bag axes (so a field added to the record is expanded too).
+    ``rows``: {a buffer's length: the rows used}: a field over the bags whose first axis is
+    such a buffer keeps only the rows used (the recorded rows, not the buffer's room)."""
     if not cl.shared:
         return record
     nl, nb = cl.first.size, cl.of_bag.size
     small, large = probe(nl), probe(nb)
+    rows = rows or {}
     fields = {}
     for name, value, a, b in zip(record._fields, record, small, large):
         if isinstance(value, np.ndarray) and isinstance(a, np.ndarray) and a.shape != b.shape:
             axes = [k for k, (m, n) in enumerate(zip(a.shape, b.shape)) if m != n]
+            if axes[0] > 0 and value.shape[0] in rows:
+                value = value[:rows[value.shape[0]]]
             for ax in axes:
                 value = np.take(value, cl.of_bag, axis=ax)
         fields[name] = value

@@ -259,8 +259,11 @@ class Ascent:
         nr, ns, ng = self.plant.modal.nr, self.plant.strips.ns, self.plant.seabed.ng
         self.state = expand(self.state, lambda n: new_run_state(nr, n, ns, ng), cl)
         self.switches = expand(self.switches, lambda n: new_switches(n, ns), cl)
+        rec = self.recorder
+        used = {rec.snap_t.size: int(rec.counts[1])}  # the buffers' rows used
+        used[rec.t.size] = max(int(rec.counts[0]), used.get(rec.t.size, 0))
         self.recorder = expand_events(
-            expand(self.recorder, lambda n: new_record(1, 1, 1, n, nr, ng, ns), cl), cl)
+            expand(rec, lambda n: new_record(1, 1, 1, n, nr, ng, ns), cl, used), cl)
 
     def _noise(self, k0: int, k1: int) -> None:
         """Noise rows of steps k0 .. k1 - 1 and of their control samples."""
