@@ -189,9 +189,9 @@ def expand_events(recorder, cl: Clusters):
     for k in range(n):
         code, j = int(recorder.ev_code[k]), int(recorder.ev_index[k])
         row = (recorder.ev_t[k], code, j, recorder.ev_value[k])
-        if code == EV_ARRIVAL:
+        if code == EV_ARRIVAL and j >= 0:
             rows += [(row[0], code, int(i), row[3]) for i in cl.members(j)]
-        elif code in BAG_EVENTS:
+        elif code in BAG_EVENTS and j >= 0:
             rows.append((row[0], code, int(cl.first[j]), row[3]))
         else:
             rows.append(row)

@@ -124,7 +124,9 @@ class Bags(NamedTuple):
     ``force`` and ``gen_bag`` (:data:`BAG_COLUMNS`) are scaled by ``count``, and sums over
     the bags (the groups' uplift, the compressor's demand) weight each bag by ``count``.
     A plant's own record (:class:`flexlift.ascent.plant.Plant`) has one bag per bag:
-    ``count`` all 1.
+    ``count`` all 1. A field added here is per bag when its first axis runs over the bags
+    (bags that differ in it then never share a loop bag, with no change elsewhere); one whose
+    last axis does (a generalised force per unit bag force) goes into :data:`BAG_COLUMNS`.
     """
 
     nb: int
