@@ -41,7 +41,7 @@ def test_recorded_row_matches_dense_correction(many_bags):
     dense = {"z_strip": scaled_z @ strip_e, "z_bag": scaled_z @ bag_e,
              "s_strip": scaled_s @ strip_e, "s_bag": scaled_s @ bag_e}
     assert dense["z_bag"].shape == (P.bags.nb, P.bags.nb)
-    run = Ascent(sc, P, "decentralized", 60.0, "table")
+    run = Ascent(sc, P, "decentralized", 60.0, "table", share=False)  # a loop bag per bag
     st = run.state
     rng = np.random.default_rng(7)
     st.q[:] = 0.0  # at rest: the row's heights are the correction alone, read to 1e-12

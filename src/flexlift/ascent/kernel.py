@@ -254,14 +254,15 @@ def supply_limit(plant, state, switches):
     """The compressor's share: when the bags being filled ask for more free air than its
     delivery Q_fad (``plant.bags.supply_free_air`` > 0), every fill is scaled down alike so that
     sum(fill_i p_i / p_atm) = Q_fad; each bag then fills at its share times p_atm / p_i at its
-    depth (docs/theory/gas.md#supply). Held until the next control sample, like the command."""
+    depth (docs/theory/gas.md#supply). Held until the next control sample, like the command.
+    A bag standing for ``count`` identical bags asks for that many shares."""
     bags = plant.bags
     if bags.supply_free_air <= 0.0:
         return
     demand = 0.0
     for i in range(bags.nb):
         p = ambient_pressure(state.z[i], bags.water_depth, bags.p_atm, bags.rho_g)
-        demand += state.fill[i] * switches.supply[i] * p / bags.p_atm
+        demand += state.fill[i] * switches.supply[i] * p / bags.p_atm * bags.count[i]
     if demand > bags.supply_free_air:
         scale = bags.supply_free_air / demand
         for i in range(bags.nb):

@@ -19,6 +19,13 @@ import numpy as np
 
 from flexlift.ascent import kernel
 from flexlift.ascent.checks import planned_run, refuse_unworkable, warn_short
+from flexlift.ascent.clusters import (
+    expand,
+    expand_events,
+    find_clusters,
+    loop_controllers,
+    loop_records,
+)
 from flexlift.ascent.faults import apply_fault, check_faults, fault_step
 from flexlift.ascent.noise import ForceNoise, MeasurementNoise
 from flexlift.ascent.paper import paper_plant
@@ -35,6 +42,7 @@ from flexlift.ascent.state import (
     new_switches,
 )
 from flexlift.control.build import controller_for, fuzzy_maps
+from flexlift.control.controller import new_state
 from flexlift.errors import InputError, SimulationError
 
 MODES = ("decentralized", "coordinated", "paper", "open-loop")
@@ -45,7 +53,8 @@ AUTO_FIRST_S = 10_000.0
 
 
 def simulate(scenario, control: str | None = None, duration: float | None = None,
-             engine="table", progress=None, plant: Plant | None = None) -> Result:
+             engine="table", progress=None, plant: Plant | None = None,
+             share: bool = True) -> Result:
     """Simulate the ascent of ``scenario``.
 
     Parameters
@@ -67,6 +76,10 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     plant : Plant, optional
         A prebuilt :class:`~flexlift.ascent.plant.Plant` (default: built from the scenario,
         the paper's plant in paper mode).
+    share : bool, optional
+        Identical bags at one lift point share the compiled loop's work (default;
+        :mod:`flexlift.ascent.clusters`); False: the loop keeps every bag on its own (the same
+        results, to rounding).
 
     Returns
     -------
@@ -98,7 +111,7 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     refuse_unworkable(scenario, plant)
     if duration is None:
         warn_short(scenario, plant)
-    return Ascent(scenario, plant, mode, T_end, engine).run(progress)
+    return Ascent(scenario, plant, mode, T_end, engine, share).run(progress)
 
 
 class Ascent:
@@ -106,15 +119,26 @@ class Ascent:
 
     The plant's records are ``plant.modal``, ``.strips``, ``.bags`` and ``.seabed``; the
     run's are ``controllers``, ``control_state``, ``state``, ``switches``, ``settings`` and
-    ``recorder`` (:class:`~flexlift.ascent.records.LoopInputs`)."""
+    ``recorder`` (:class:`~flexlift.ascent.records.LoopInputs`).
 
-    def __init__(self, scenario, plant: Plant, mode: str, T_end: float, engine):
+    Identical bags at one lift point share a bag of the loop (``share``, default True;
+    :mod:`flexlift.ascent.clusters`): ``records`` are the plant's records as the loop reads
+    them, ``clusters`` which bags share; during the run the state, switches and record hold
+    one entry per loop bag, and once it ends one per bag of the plant."""
+
+    def __init__(self, scenario, plant: Plant, mode: str, T_end: float, engine,
+                 share: bool = True):
         sim, lim, c = scenario.simulation, scenario.limits, scenario.control
         self.scenario, self.plant, self.mode = scenario, plant, mode
-        modal, strips, bags, seabed = plant.modal, plant.strips, plant.bags, plant.seabed
         dt = sim.time_step_s
         table, self.external, fill = fuzzy_maps(scenario, engine)
-        self.controllers, self.control_state = controller_for(scenario, plant, mode, table, fill)
+        controllers, self.control_state = controller_for(scenario, plant, mode, table, fill)
+        self.clusters = find_clusters(scenario, plant, controllers, share)
+        self.records = loop_records(plant.records, self.clusters)
+        self.controllers = loop_controllers(controllers, self.clusters)
+        if self.clusters.shared:
+            self.control_state = new_state(self.controllers.bags.size)
+        modal, strips, bags, seabed = self.records
         self.settings = Settings(
             dt=dt, n_steps=int(math.ceil(T_end / dt - 1e-9)),
             k_ctrl=max(1, int(round(1.0 / c.sample_rate_Hz / dt))),
@@ -150,7 +174,7 @@ class Ascent:
     def inputs(self) -> LoopInputs:
         """The compiled loop's records, as they are now (the switches' noise changes between
         chunks)."""
-        return LoopInputs(plant=self.plant.records, controllers=self.controllers,
+        return LoopInputs(plant=self.records, controllers=self.controllers,
                           control_state=self.control_state, state=self.state,
                           switches=self.switches, settings=self.settings,
                           recorder=self.recorder)
@@ -158,7 +182,7 @@ class Ascent:
     def _initial_state(self) -> None:
         """Neutral gas, the full hold, and the structure at rest on the held seabed springs."""
         state = self.state
-        state.n[:] = self.plant.initial_moles()
+        state.n[:] = self.plant.initial_moles()[self.clusters.first]
         state.H[:] = self.plant.seabed.H0
         state.H_rate[:] = np.nan
         kernel.initial_equilibrium(self.inputs())
@@ -189,6 +213,7 @@ class Ascent:
             kernel.final_row(self._t_last(), self.inputs())
         if progress is not None:
             progress(1.0)
+        self._per_bag()
         result = build_result(self, error)
         if error:
             raise SimulationError(error + " (results kept up to that moment)", partial=result)
@@ -209,7 +234,7 @@ class Ascent:
 
     def _room(self, k_stop: int) -> None:
         """Grow the record (doubling) so that it holds the rows and snapshots to ``k_stop``."""
-        settings, rec, p = self.settings, self.recorder, self.plant
+        settings, rec, p = self.settings, self.recorder, self.records
         if (k_stop // settings.k_out + 2 <= rec.t.size
                 and k_stop // settings.k_str + 2 <= rec.snap_t.size):
             return
@@ -221,9 +246,25 @@ class Ascent:
         self.recorder = new
 
     def _fault(self, fault, t: float) -> None:
-        detail = apply_fault(fault, t, list(self.plant.names), self.switches,
+        names = [self.plant.names[i] for i in self.clusters.first]  # a faulted bag: its own
+        detail = apply_fault(fault, t, names, self.switches,
                              self.controllers.bags, self.control_state)
         self.fault_events.append((t, fault.kind, fault.bag, detail))
+
+    def _per_bag(self) -> None:
+        """The state, switches and record with one entry per bag of the plant (each bag's
+        loop bag's), at the end of the run."""
+        cl = self.clusters
+        if not cl.shared:
+            return
+        nr, ns, ng = self.plant.modal.nr, self.plant.strips.ns, self.plant.seabed.ng
+        self.state = expand(self.state, lambda n: new_run_state(nr, n, ns, ng), cl)
+        self.switches = expand(self.switches, lambda n: new_switches(n, ns), cl)
+        rec = self.recorder
+        used = {rec.snap_t.size: int(rec.counts[1])}  # the buffers' rows used
+        used[rec.t.size] = max(int(rec.counts[0]), used.get(rec.t.size, 0))
+        self.recorder = expand_events(
+            expand(rec, lambda n: new_record(1, 1, 1, n, nr, ng, ns), cl, used), cl)
 
     def _noise(self, k0: int, k1: int) -> None:
         """Noise rows of steps k0 .. k1 - 1 and of their control samples."""

@@ -90,7 +90,7 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
         rho_g=pb.rho_g,
         water_depth=pb.water_depth, corr_shape=eye, corr_weight=-W * D,
         slope_shape=np.zeros((ne, ne)), slope_weight=np.zeros(ne),
-        gen_strip=eye * (D * trib)[:, None], gen_bag=eye * D[:, None])
+        gen_strip=eye * (D * trib)[:, None], gen_bag=eye * D[:, None], count=np.ones(ne))
     seabed = Seabed(ng=ne, hold_force=-force.copy(), H0=H0, group_weight=W,
                     breakout_time=psb.breakout_time, release_time=psb.release_time,
                     liftoff_clearance=psb.liftoff_clearance)

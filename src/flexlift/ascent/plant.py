@@ -352,7 +352,8 @@ def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
         supply_free_air=(scenario.gas.supply_free_air_m3_min or 0.0) / 60.0,
         **gas_constants(scenario),
         corr_shape=cs, corr_weight=cw, slope_shape=ss, slope_weight=sw,
-        gen_strip=np.ascontiguousarray(strip_e), gen_bag=np.ascontiguousarray(bag_e))
+        gen_strip=np.ascontiguousarray(strip_e), gen_bag=np.ascontiguousarray(bag_e),
+        count=np.ones(nb))
 
 
 def bag_bodies(scenario, hull: Hull, external: np.ndarray, capacity: np.ndarray) -> dict:

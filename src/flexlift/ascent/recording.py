@@ -81,11 +81,12 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
 
 @jit
 def group_uplift(plant, V, attached, g):
-    """Net uplift U_g of holding group ``g`` [N]: its bags' buoyancy minus its wet weight."""
+    """Net uplift U_g of holding group ``g`` [N]: its bags' buoyancy minus its wet weight
+    (a bag standing for ``count`` identical bags counted that many times)."""
     total = 0.0
     for i in range(V.size):
         if plant.bags.group[i] == g:
-            total += plant.bags.rho_g * V[i] * attached[i]
+            total += plant.bags.rho_g * V[i] * attached[i] * plant.bags.count[i]
     return total - plant.seabed.group_weight[g]
 
 

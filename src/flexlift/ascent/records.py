@@ -130,6 +130,7 @@ class Bags(NamedTuple):
     slope_weight (nb,)        rad         ... of the wet weight
     gen_strip (ne, ns)        m           eliminated modes' generalised force per line load
     gen_bag (ne, nb)          -           ... per unit bag force
+    count (nb,)               -           identical bags this loop bag stands for (1: one)
     ========================= =========== ==================================================
 
     The corrections are the eliminated modes' static (mdc) response: they enter the recorded
@@ -138,6 +139,16 @@ class Bags(NamedTuple):
     corr_shape @ (gen_bag @ point)``), so a recorded row costs O(ne (nb + ns)), not the
     O(nb (nb + ns)) of the dense products (the paper's plant: ``corr_shape`` the identity,
     its gains in ``gen_strip``, ``gen_bag``).
+
+    **Clusters** (:mod:`flexlift.ascent.clusters`): a bag of the compiled loop may stand for
+    ``count`` identical bags at one lift point. Its gas, pressure, volume and controller are
+    those of one member; what acts on the structure is the members' sum: the columns of
+    ``force`` and ``gen_bag`` (:data:`BAG_COLUMNS`) are scaled by ``count``, and sums over
+    the bags (the groups' uplift, the compressor's demand) weight each bag by ``count``.
+    A plant's own record (:class:`flexlift.ascent.plant.Plant`) has one bag per bag:
+    ``count`` all 1. A field added here is per bag when its first axis runs over the bags
+    (bags that differ in it then never share a loop bag, with no change elsewhere); one whose
+    last axis does (a generalised force per unit bag force) goes into :data:`BAG_COLUMNS`.
     """
 
     nb: int
@@ -166,6 +177,26 @@ class Bags(NamedTuple):
     slope_weight: np.ndarray
     gen_strip: np.ndarray
     gen_bag: np.ndarray
+    count: np.ndarray
+
+
+#: the fields of :class:`Bags` whose last axis runs over the bags: generalised forces per unit
+#: bag force (a cluster's column is its members' sum). Every other array field whose first
+#: axis has ``nb`` entries is per bag along that axis, except those of :data:`NOT_PER_BAG`.
+BAG_COLUMNS = ("force", "gen_bag")
+#: array fields of :class:`Bags` that are not per bag whatever their shape
+NOT_PER_BAG = ("gen_strip",)
+
+
+def bag_axis(name: str, value, nb: int) -> int | None:
+    """The axis of field ``name`` of a :class:`Bags` record that runs over its ``nb`` bags
+    (None: not a per-bag field): the last for :data:`BAG_COLUMNS`, else the first of an array
+    with ``nb`` rows."""
+    if not isinstance(value, np.ndarray) or value.ndim == 0 or name in NOT_PER_BAG:
+        return None
+    if name in BAG_COLUMNS:
+        return value.ndim - 1
+    return 0 if value.shape[0] == nb else None
 
 
 class Seabed(NamedTuple):

@@ -177,5 +177,5 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
         ref_v=prof.v if prof else np.zeros(2),
         table=np.ascontiguousarray(values), fill_v=fill_map.table.values,
         start=start_times(scenario, plant.names, plant.x_point, plant.external)[bags],
-        staged=c.sequence is not None)
+        staged=c.sequence is not None, weight=np.ones(bags.size))
     return arrays, new_state(bags.size)

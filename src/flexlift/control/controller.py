@@ -97,6 +97,8 @@ class ControlArrays(NamedTuple):
     #                     evenly over [0, 1] (0 below, 1 above)
     start: np.ndarray  # (nc,) start time of each bag in a staged lift (all 0 if not staged) [s]
     staged: bool  # a staged lift: per-group reference starts, levelling on the height errors
+    weight: np.ndarray  # (nc,) the identical bags each controller stands for (1; a cluster's
+    #                     count, flexlift.ascent.clusters): its weight in the means and the fit
 
 
 class ControlState(NamedTuple):
@@ -206,20 +208,20 @@ def _note_separations(t, separated, controllers, control_state):
         return
     control_state.flags[1] = True
     if controllers.mode == COORDINATED and controllers.staged:  # each group: its bags' mean
-        total, count = 0.0, 0
+        total, count = 0.0, 0.0
         for i in range(control_state.z_f.size):
             if control_state.t_sep[i] == t and control_state.active[i]:
-                total += control_state.z_f[i]
-                count += 1
+                total += controllers.weight[i] * control_state.z_f[i]
+                count += controllers.weight[i]
         for i in range(control_state.z_f.size):
             if control_state.t_sep[i] == t:
                 control_state.z0[i] = total / count if count else control_state.z_f[i]
     elif controllers.mode == COORDINATED:  # one heave reference from the live bags' mean height
-        total, count = 0.0, 0
+        total, count = 0.0, 0.0
         for i in range(control_state.z_f.size):
             if control_state.active[i]:
-                total += control_state.z_f[i]
-                count += 1
+                total += controllers.weight[i] * control_state.z_f[i]
+                count += controllers.weight[i]
         mean = total / count if count else 0.0
         for i in range(control_state.z_f.size):
             control_state.z0[i] = mean
@@ -297,12 +299,12 @@ def _purge(i, excess, controllers, control_state):
 @jit
 def _level(controllers, control_state):
     """Coordinated mode: the pitch-levelling correction of every desired volume (staged: of
-    the bags under way, on their height errors)."""
-    total, count = 0.0, 0
+    the bags under way, on their height errors); each bag weighted by the bags it stands for."""
+    total, count = 0.0, 0.0
     for i in range(control_state.z_f.size):
         if _levelled(i, controllers, control_state):
-            total += controllers.x[i]
-            count += 1
+            total += controllers.weight[i] * controllers.x[i]
+            count += controllers.weight[i]
     if count < 2:
         return
     mean = total / count
@@ -310,13 +312,14 @@ def _level(controllers, control_state):
     for i in range(control_state.z_f.size):
         if _levelled(i, controllers, control_state):
             d = controllers.x[i] - mean
-            xx += d * d
+            wd = controllers.weight[i] * d
+            xx += wd * d
             if controllers.staged:
-                xz += d * (control_state.z_f[i] - control_state.z_ref[i])
-                xzd += d * (control_state.zd_f[i] - control_state.zd_ref[i])
+                xz += wd * (control_state.z_f[i] - control_state.z_ref[i])
+                xzd += wd * (control_state.zd_f[i] - control_state.zd_ref[i])
             else:
-                xz += d * control_state.z_f[i]
-                xzd += d * control_state.zd_f[i]
+                xz += wd * control_state.z_f[i]
+                xzd += wd * control_state.zd_f[i]
     if xx <= 0.0:
         return
     corr = controllers.k_pitch * xz / xx + controllers.k_pitch_rate * xzd / xx

@@ -58,17 +58,16 @@ def equal_share_positions(x: np.ndarray, q: np.ndarray, points, n: int) -> np.nd
     C = np.array([c[1] for c in cells])
     Mx = np.array([c[2] for c in cells])
     total = C.sum()
-    cum = np.cumsum(C)
-    out = np.empty(n)
     edges = np.linspace(0.0, total, n + 1)
-    for k in range(n):
-        lo, hi = edges[k], edges[k + 1]
-        # the share of each cell inside [lo, hi] of the cumulative load
-        start = cum - C
-        frac = np.clip((np.minimum(cum, hi) - np.maximum(start, lo)) / np.where(C > 0, C, 1.0), 0, 1)
-        w = frac * C
-        out[k] = (frac * Mx).sum() / w.sum() if w.sum() > 0 else x[0] + (k + 0.5) * (x[-1] - x[0]) / n
-    return np.sort(out)
+    if total <= 0:
+        return np.sort(x[0] + (np.arange(n) + 0.5) * (x[-1] - x[0]) / n)
+    # the first moment of the load up to a level of the cumulative load, each cell's share
+    # taken in proportion (piecewise linear between the cells' ends); a segment's centroid is
+    # its moment over its load
+    keep = C > 0
+    cum = np.concatenate(([0.0], np.cumsum(C[keep])))
+    moment = np.interp(edges, cum, np.concatenate(([0.0], np.cumsum(Mx[keep]))))
+    return np.sort(np.diff(moment) / np.diff(edges))
 
 
 def static_moment(x, q_down, points_down, bag_x, bag_lift):
@@ -84,11 +83,18 @@ MAX_REFINED = 60
 
 def moment_cost(x, M0, p, bag_lift: float) -> tuple[float, np.ndarray]:
     """(mean square moment [N^2 m^2], its gradient in the bag positions ``p`` [N^2 m]) with
-    bags of ``bag_lift`` [N] at ``p`` added to ``M0``, the moment along ``x`` without them
-    (the bags' term of :func:`~flexlift.loads.strength.shear_moment`: F max(x - p, 0))."""
-    below = x[:, None] > p[None, :]
-    M = M0 + bag_lift * (below * (x[:, None] - p[None, :])).sum(axis=1)
-    return float(np.mean(M**2)), -2.0 * bag_lift * (below * M[:, None]).mean(axis=0)
+    bags of ``bag_lift`` [N] at ``p`` added to ``M0``, the moment along ``x`` (ascending)
+    without them (the bags' term of :func:`~flexlift.loads.strength.shear_moment`:
+    F max(x - p, 0)). By sorted sums, O(len(x) + n log n), not the (len(x), n) arrays: at x
+    the k bags below it add F (k x - their positions' sum); bag j's gradient is -2 F / len(x)
+    times the sum of M over the points above it."""
+    ps = np.sort(p)
+    k = np.searchsorted(ps, x, side="left")  # bags strictly below each point
+    below_sum = np.concatenate(([0.0], np.cumsum(ps)))
+    M = M0 + bag_lift * (k * x - below_sum[k])
+    above = np.concatenate((np.cumsum(M[::-1])[::-1], [0.0]))  # sum of M from each point on
+    first_above = np.searchsorted(x, p, side="right")
+    return float(np.mean(M**2)), -2.0 * bag_lift * above[first_above] / x.size
 
 
 def refine(x, q, points, start: np.ndarray, bag_lift: float, x_target_moment: float,
@@ -121,10 +127,11 @@ def refine(x, q, points, start: np.ndarray, bag_lift: float, x_target_moment: fl
 
 def clusters(positions: np.ndarray, min_spacing: float) -> list[tuple[float, int]]:
     """Lift points (x [m], number of bags) merging bags closer than ``min_spacing`` [m]."""
-    groups: list[list[float]] = []
+    groups: list[list[float]] = []  # [sum of positions, count] of each lift point
     for p in np.sort(positions):
-        if groups and p - np.mean(groups[-1]) < min_spacing:
-            groups[-1].append(float(p))
+        if groups and p - groups[-1][0] / groups[-1][1] < min_spacing:
+            groups[-1][0] += float(p)
+            groups[-1][1] += 1
         else:
-            groups.append([float(p)])
-    return [(float(np.mean(g)), len(g)) for g in groups]
+            groups.append([float(p), 1])
+    return [(total / count, int(count)) for total, count in groups]

@@ -58,10 +58,13 @@ def _spread(a: np.ndarray, dims: tuple, pos: np.ndarray, n_bags: int) -> np.ndar
     return full
 
 
-def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
+def stack(datasets: list[xr.Dataset], by_point: dict | None = None) -> xr.Dataset:
     """The datasets of several control modes (``attrs["control"]`` names each) as one. The
     ``bag`` dimension is the union of the modes' bags (the paper's plant has the external bags
-    only): a bag a mode has not is padded like a missing row."""
+    only): a bag a mode has not is padded like a missing row. ``by_point``: for a mode read
+    back with :func:`unstack` (``by_point=True``), its bags' points (``{mode: bag_point}``):
+    its histories stored by point are spread to its bags one variable at a time."""
+    by_point = by_point or {}
     modes = [d.attrs["control"] for d in datasets]
     if len(set(modes)) != len(modes):
         raise ValueError(f"one dataset per control mode, got {modes}")
@@ -76,6 +79,11 @@ def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
     template = {}
     for name in names:
         template[name] = next(d[name] for d in datasets if name in d.variables)
+        if template[name].dims[-1:] == ("point",):  # as the bags' histories it stands for
+            tv = template[name]
+            template[name] = xr.Variable(tv.dims[:-1] + ("bag",), np.zeros(
+                tv.shape[:-1] + (0,), tv.dtype), {k: v for k, v in tv.attrs.items()
+                                                   if k != _STORED})
     data = {}
     first_of_point, bag_point = _points(datasets, bags)
     for name, tv in template.items():
@@ -84,10 +92,13 @@ def stack(datasets: list[xr.Dataset]) -> xr.Dataset:
         for d in datasets:
             if name not in d.variables:  # a variable this mode has not (no strength grid)
                 shape = tuple(sizes[dim] if dim in _TIMES else len(bags) if dim == "bag"
-                              else tv.sizes[dim] for dim in tv.dims)
+                              else d0 for dim, d0 in zip(tv.dims, tv.shape))
                 parts.append(np.full(shape, _fill(tv.dtype), dtype=tv.dtype))
                 continue
-            a = _spread(d[name].values, tv.dims, pos[d.attrs["control"]], len(bags))
+            a = d[name].values
+            if d[name].dims[-1:] == ("point",):
+                a = a[..., by_point[d.attrs["control"]]]
+            a = _spread(a, tv.dims, pos[d.attrs["control"]], len(bags))
             if tv.dims and tv.dims[0] in _TIMES:
                 a = _padded(a, sizes[tv.dims[0]])
             parts.append(a)
@@ -168,9 +179,13 @@ def modes_of(ds: xr.Dataset) -> list[str]:
     return ds.attrs["modes"].split()
 
 
-def unstack(ds: xr.Dataset, mode: str | None = None) -> xr.Dataset:
+def unstack(ds: xr.Dataset, mode: str | None = None, variables=None,
+            by_point: bool = False) -> xr.Dataset:
     """One mode's dataset (the first when ``mode`` is None) as :func:`stack` received it; the
-    float32 variables come back as float64."""
+    float32 variables come back as float64. ``variables``: only these (default all; the
+    coordinates always). ``by_point``: the histories stored once per lift point stay so
+    (``(time, point)``; :func:`bag_points` says which point is each bag's), for
+    :func:`stack` to take back without holding every bag's copy at once."""
     modes = modes_of(ds)
     mode = modes[0] if mode is None else mode
     if mode not in modes:
@@ -187,7 +202,7 @@ def unstack(ds: xr.Dataset, mode: str | None = None) -> xr.Dataset:
         a = v.values[k]
         dims = v.dims[1:]
         attrs = dict(v.attrs)
-        if dims[-1:] == ("point",):  # stored once per lift point: back to every bag
+        if dims[-1:] == ("point",) and not by_point:  # stored per lift point: to every bag
             a, dims = a[..., ds["bag_point"].values], dims[:-1] + ("bag",)
             attrs.pop(_STORED, None)
         if dims and dims[0] in cut:
@@ -211,5 +226,14 @@ def unstack(ds: xr.Dataset, mode: str | None = None) -> xr.Dataset:
             vals = ds[c].values
             coords[c] = (c, vals.astype(str) if vals.dtype.kind == "S" else vals,
                          dict(ds[c].attrs))
-    data = {name: one(name) for name in meta["variables"]}
+    data = {name: one(name) for name in meta["variables"]
+            if variables is None or name in variables}
     return xr.Dataset(data, coords=coords, attrs=meta["attrs"])
+
+
+def bag_points(ds: xr.Dataset, mode: str) -> np.ndarray:
+    """The lift point (column along ``point``) of each of ``mode``'s own bags in a stacked
+    dataset (what :func:`stack` takes for a mode read with ``unstack(by_point=True)``)."""
+    meta = json.loads(ds.attrs["mode_attrs"])[mode]
+    union = [b.decode() if isinstance(b, bytes) else str(b) for b in ds["bag"].values]
+    return ds["bag_point"].values[[union.index(b) for b in meta["bags"]]].astype(int)

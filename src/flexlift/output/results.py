@@ -40,11 +40,28 @@ def save_netcdf(result: Result | list[Result], path) -> Path:
 def add_to_netcdf(result: Result, path) -> Path:
     """Add ``result``'s control mode to the file at ``path`` (written by :func:`save_netcdf`;
     a mode already there is replaced, a missing file is created); returns the path."""
+    from flexlift.output.modesfile import bag_points, stack, unstack
+    from flexlift.plumbing.atomic import atomic_file
+
     path = Path(path)
-    others: list[Result] = []
-    if path.is_file():
-        others = [load_netcdf(path, m) for m in netcdf_modes(path) if m != result.control]
-    return save_netcdf(others + [result], path)
+    if not path.is_file():
+        return save_netcdf([result], path)
+    with xr.open_dataset(path, engine="scipy") as ds:
+        by_mode = "mode" in ds.dims
+        if by_mode:
+            ds = ds.load()
+    if not by_mode:  # a single result, as flexlift wrote it before the mode dimension
+        old = load_netcdf(path)
+        return save_netcdf(([old] if old.control != result.control else []) + [result], path)
+    # the other modes as stored: their histories by lift point are spread to the bags one
+    # variable at a time (not every mode's copy of every bag's history at once)
+    modes = [m for m in ds.attrs["modes"].split() if m != result.control]
+    others = [unstack(ds, m, by_point=True) for m in modes]
+    stacked = stack(others + [result.dataset], by_point={m: bag_points(ds, m) for m in modes})
+    del ds, others
+    with atomic_file(path, suffix=".nc") as tmp:
+        stacked.to_netcdf(tmp, engine="scipy")
+    return path
 
 
 def netcdf_modes(path) -> list[str]:
@@ -55,17 +72,20 @@ def netcdf_modes(path) -> list[str]:
         return modes_of(ds) if "mode" in ds.dims else [ds.attrs["control"]]
 
 
-def load_netcdf(path, mode: str | None = None) -> Result:
+def load_netcdf(path, mode: str | None = None, variables=None) -> Result:
     """Read one control mode (the file's first when None) of a file written by
     :func:`save_netcdf` (or a single result as flexlift wrote it before the ``mode``
     dimension; a file of an earlier version, whose ``lift`` held the sling force, is read
-    with it named ``sling_force``)."""
+    with it named ``sling_force``). ``variables``: only these of a file with the ``mode``
+    dimension (default all; the coordinates and attributes always)."""
     from flexlift.output.modesfile import unstack
 
     with xr.open_dataset(path, engine="scipy") as ds:
+        if "mode" in ds.dims:  # only what is asked for read into memory
+            drop = [v for v in ds.data_vars if variables is not None and v not in variables
+                    and v not in ("time", "time_strength", "bag_point", "rows", "strength_rows")]
+            return Result(unstack(ds.drop_vars(drop).load(), mode, variables))
         ds = ds.load()
-    if "mode" in ds.dims:
-        return Result(unstack(ds, mode))
     for name in ("bag", "bag_kind"):
         if ds[name].dtype.kind == "S":
             ds[name] = ds[name].astype(str)

@@ -253,7 +253,8 @@ def compare_stage(outputs: list[StageOutput], out: Path | None) -> StageOutput:
                    "all criteria", "outcome"], rows)
     figures = []
     if out is not None:
-        results = [load_netcdf(Path(out) / "results.nc", m) for m in modes]
+        results = [load_netcdf(Path(out) / "results.nc", m, variables=ascent.COMPARED)
+                   for m in modes]
         path = draw(Path(out) / "figures" / "simulate_compare.png", ascent.compare, results)
         figures.append(Figure(path, f"Control modes compared: {', '.join(modes)}; time in "
                                     "seconds, from 60 s before the first separation."))

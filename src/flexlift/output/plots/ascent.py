@@ -202,6 +202,10 @@ def seabed_and_stress(result, validity_deg: float, x=None, utilisation=None):
     return fig
 
 
+#: the variables :func:`compare` reads of each result
+COMPARED = ("heave", "pitch", "ascent_velocity", "moment_max", "moment_min")
+
+
 def compare(results):
     """Several control modes on one figure: mean height, hull pitch, fastest bag velocity over
     the union of their zoom windows, and the bending-moment envelopes."""
