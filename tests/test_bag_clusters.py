@@ -169,9 +169,9 @@ def test_any_difference_in_the_bag_record_or_controller_splits(fifty):
     drag[k] *= 1.0 + 1e-12
     P2 = dataclasses.replace(P, bags=P.bags._replace(drag=drag))
     assert _clusters(sc, P2).first.size == base.first.size + 1
-    # a field the record does not have today (a bag kind, say): it splits with no change to
+    # a field the record does not have (a maker's code, say): it splits with no change to
     # the clusters' module
-    Wider = namedtuple("Bags", [*P.bags._fields, "kind"])
+    Wider = namedtuple("Bags", [*P.bags._fields, "maker_code"])
     kind = np.zeros(P.bags.nb, dtype=np.int64)
     kind[k] = 2
     P3 = dataclasses.replace(P, bags=Wider(*P.bags, kind))

@@ -144,6 +144,30 @@ def test_a_failing_case_gets_its_margin_from_the_runs(tmp_path):
             assert c["margin"] is None
 
 
+def test_the_margin_scales_the_survivors_only_and_the_pinned_plan_is_the_plan():
+    """The capacity margin multiplies every bag's true capacity but the failed one's (the
+    plan pinned in lift.bags); at scale 1 the pinned plan is the plan itself (same bags, same
+    ascent)."""
+    from flexlift.sweep.contingency.margin import pinned_bags, scale_changes
+    from flexlift.sweep.plants import plant_for
+
+    sc = TANKER
+    pinned = pinned_bags(sc)
+    scaled = sc.with_changes(**scale_changes("capacity", 1.2, sc, "bag_2", pinned))
+    same = sc.with_changes(**scale_changes("capacity", 1.0, sc, "bag_2", pinned))
+    P0, P1, P2 = (plant_for(s, "decentralized") for s in (sc, scaled, same))
+    assert P0.names == P1.names == P2.names
+    ratio = dict(zip(P0.names, P1.bags.capacity / P0.bags.capacity))
+    assert ratio.pop("bag_2") == 1.0
+    assert np.allclose(list(ratio.values()), 1.2, rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(P2.bags.capacity, P0.bags.capacity)
+    a, b = simulate(sc, "decentralized"), simulate(same, "decentralized")
+    np.testing.assert_allclose(b.dataset["height"], a.dataset["height"], rtol=0, atol=1e-9)
+    assert a.events == b.events
+    assert scale_changes("capacity", 1.2, load_scenario("pipeline"), "x", None) == {
+        "lift.catalogue_bag.capacity_factor": 1.2}
+
+
 @pytest.mark.parametrize("args, needle", [
     (["--phases", "pul"], "--phases: got 'pul'; use pull, breakout, mid, near_target"),
     (["--kinds", "valve_stuck"], "--kinds: got 'valve_stuck'; use bag_rupture, sling_break"),

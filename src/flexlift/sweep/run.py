@@ -239,10 +239,11 @@ def _failures(records: dict) -> int:
 
 
 def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, progress,
-             fn=run_case) -> None:
+             fn=None) -> None:
     """Run ``todo`` on ``engine`` (each case a :class:`~flexlift.sweep.worker.Task` given to
     ``fn``, by default :func:`~flexlift.sweep.worker.run_case`), writing each record into
     ``folder`` and ``records`` as it returns; ``progress(done, total, failed)``."""
+    fn = fn or run_case  # looked up now (a test may replace the module's run_case)
     queue = collections.deque(todo)
     suspects: collections.deque[Case] = collections.deque()
     attempts: dict[int, int] = collections.Counter()
@@ -284,7 +285,7 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
             check()
 
 
-def _submit(engine, spec, case: Case, attempts, inflight, fn=run_case) -> None:
+def _submit(engine, spec, case: Case, attempts, inflight, fn) -> None:
     attempts[case.index] += 1
     task = Task(case.index, spec.base, changes(spec, case), spec.controls, spec.keep == "histories")
     inflight[engine.submit(fn, task)] = case

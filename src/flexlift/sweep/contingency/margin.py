@@ -1,9 +1,10 @@
 """The margin of a failing single-failure case: by how much the plan must grow to survive it.
 
-The scale is uniform: on every bag's true gas capacity (``lift.catalogue_bag.
-capacity_factor``; the failed bag's too, which is gone or out of control, except for a fill
-valve stuck open, where its larger capacity is part of the test) or, for a dump valve stuck
-closed, on the purge valves' capacity (``gas.purge_rate_max_m3_s``). The case is run first at
+The scale is uniform: on the surviving bags' true gas capacity (the plan pinned in
+``lift.bags``, one entry per bag, and every bag but the failed one given its ``capacity_factor``
+times the scale: :func:`scale_changes`; a pipeline's bags come from ``pipe:``, so there every
+bag's factor, ``lift.catalogue_bag.capacity_factor``, is scaled, the failed one's too) or, for
+a dump valve stuck closed, on the purge valves' capacity (``gas.purge_rate_max_m3_s``). The case is run first at
 the cap (:data:`CAP`): if it still fails the margin is "> cap"; else the smallest surviving
 scale is bisected between 1 and the cap, to 1 % of the scale or 1 t of the plan's capacity
 (whichever comes first), in at most :data:`MAX_RUNS` runs in all. The margin is the smallest
@@ -29,12 +30,34 @@ def scaled(kind: str) -> str:
     return "dump_valve" if kind == "dump_valve_stuck_closed" else "capacity"
 
 
-def scale_changes(what: str, scale: float, scenario) -> dict:
-    """The dotted changes that scale ``what`` by ``scale`` in ``scenario``."""
+def scale_changes(what: str, scale: float, scenario, failed: str | None = None,
+                  pinned: tuple | None = None) -> dict:
+    """The dotted changes that scale ``what`` by ``scale`` in ``scenario``: the dump valves'
+    capacity; or, with the plan ``pinned`` (:func:`pinned_bags`), the true capacity of every
+    bag but ``failed`` (the survivors); without it (a pipeline) every bag's."""
     if what == "dump_valve":
         return {"gas.purge_rate_max_m3_s": scenario.gas.purge_rate_max_m3_s * scale}
-    return {"lift.catalogue_bag.capacity_factor":
-            scenario.lift.catalogue_bag.capacity_factor * scale}
+    default = scenario.lift.catalogue_bag.capacity_factor
+    if pinned is None:
+        return {"lift.catalogue_bag.capacity_factor": default * scale}
+    bags = []
+    for b in pinned:
+        b = dict(b)
+        if b["name"] != failed:
+            b["capacity_factor"] = b.get("capacity_factor", default) * scale
+        bags.append(b)
+    return {"lift.bags": bags}
+
+
+def pinned_bags(scenario) -> tuple | None:
+    """The plan of ``scenario`` as ``lift.bags`` entries, one per bag (None for a pipeline,
+    whose bags come from ``pipe:``)."""
+    if scenario.pipe is not None:
+        return None
+    from flexlift.sweep.studies import pin_plan
+
+    pinned = pin_plan(scenario, "contingency")[0]
+    return tuple(b.model_dump(mode="json", exclude_none=True) for b in pinned.lift.bags)
 
 
 @dataclass

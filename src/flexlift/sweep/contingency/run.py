@@ -184,10 +184,15 @@ def _margins(engine, spec, cases, answers, folder, scenario, mode):
     from flexlift.sweep.run import _execute
 
     rho = scenario.environment.seawater_density_kg_m3
-    unit_t = float(plant_for(scenario, mode).bags.capacity.sum()) * rho / 1000.0
+    plant = plant_for(scenario, mode)
+    cap_t = dict(zip(plant.names, plant.bags.capacity * rho / 1000.0))  # true capacity [t]
+    pinned = mg.pinned_bags(spec.base)
+
+    def unit(c):  # the capacity [t] the scale multiplies: the survivors' (every bag's)
+        return float(sum(cap_t.values()) - (cap_t.get(c.bag, 0.0) if pinned else 0.0))
     width = _width(len(cases))
     search = {c.index: mg.Bisection(mg.CAP[mg.scaled(c.kind)],
-                                    unit_t if mg.scaled(c.kind) == "capacity" else 0.0)
+                                    unit(c) if mg.scaled(c.kind) == "capacity" else 0.0)
               for c in cases if answers[c.index]["outcome"] not in SURVIVED}
     by_index = {c.index: c for c in cases}
     n = len(cases)
@@ -201,7 +206,7 @@ def _margins(engine, spec, cases, answers, folder, scenario, mode):
             c = by_index[i]
             idx = n + i * mg.MAX_RUNS + len(search[i].runs)
             values = {"faults": [c.fault()], **mg.scale_changes(mg.scaled(c.kind), s,
-                                                                 spec.base)}
+                                                                 spec.base, c.bag, pinned)}
             runs[idx] = (i, s, Case(idx, values))
             names[idx] = f"case_{idx:0{width}d}"
         done = {k: r for k, r in folder.finished(names).items()
@@ -217,10 +222,11 @@ def _margins(engine, spec, cases, answers, folder, scenario, mode):
     for i, b in search.items():
         r = b.result()
         what = mg.scaled(by_index[i].kind)
-        r["scales"] = ("every bag's true gas capacity" if what == "capacity"
-                       else "the dump valves' capacity")
+        r["scales"] = ("the dump valves' capacity" if what != "capacity"
+                       else "every bag's true gas capacity" if pinned is None
+                       else "the surviving bags' true gas capacity")
         if what == "capacity" and r["scale"] is not None:
-            r["extra_t"] = round((r["scale"] - 1.0) * unit_t, 1)
+            r["extra_t"] = round((r["scale"] - 1.0) * unit(by_index[i]), 1)
         out[i] = r
     return out, engine
 
