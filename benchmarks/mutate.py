@@ -38,7 +38,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: the tests each mutant runs, fastest to fail first (pytest -x stops at the first failure)
 TESTS = ("tests/test_physics.py", "tests/test_controller.py", "tests/test_control_laws.py",
          "tests/test_plant_laws.py", "tests/test_supply.py", "tests/test_results.py",
-         "tests/test_simulate.py", "tests/test_staged_lift.py")
+         "tests/test_simulate.py", "tests/test_staged_lift.py", "tests/test_bag_types.py")
 
 
 @dataclass(frozen=True)
@@ -115,9 +115,13 @@ MUTATIONS = (
       "wet_line = hull.mass_per_length[el] * g",
       "the simulated hull carries its dry weight (steel buoyancy lost)"),
     M("open-bag-relief", "ascent/plant.py",
-      "relief = np.where(external, 0.0, scenario.gas.relief_pressure_bar * C.BAR)",
-      "relief = np.full(nb, scenario.gas.relief_pressure_bar * C.BAR)",
-      "open (parachute) bags hold over-pressure: no spill at capacity"),
+      "out = dict(relief=np.where(external, 0.0, gas_relief), kind=kind,",
+      "out = dict(relief=np.full(nb, gas_relief), kind=kind,",
+      "the paper's external bags hold over-pressure: no spill at capacity"),
+    M("open-parachute-relief", "ascent/plant.py",
+      "relief = 0.0 if kind_ext == BAG_OPEN_PARACHUTE else (",
+      "relief = gas_relief if kind_ext == BAG_OPEN_PARACHUTE else (",
+      "open parachute bags relieve like closed ones: no spill from the mouth"),
     M("paper-tributary-load", "ascent/paper.py",
       "force=force * trib[None, :]", "force=force.copy()",
       "the paper's bags feel one metre of hull drag and contact, not their tributary length"),
