@@ -42,10 +42,15 @@ MODES = ("decentralized", "coordinated", "paper", "open-loop")
 CHUNK_STEPS = 2000
 #: simulation.duration_s: auto: the record first holds this much of the run [s]
 AUTO_FIRST_S = 10_000.0
+#: step control while every group is held: the longest mechanics step [s] ...
+HELD_STEP_S = 1.0
+#: ... taken only while every group's uplift is below its hold by this fraction of its H_0
+HELD_MARGIN = 0.05
 
 
 def simulate(scenario, control: str | None = None, duration: float | None = None,
-             engine="table", progress=None, plant: Plant | None = None) -> Result:
+             engine="table", progress=None, plant: Plant | None = None,
+             step_control: bool = True) -> Result:
     """Simulate the ascent of ``scenario``.
 
     Parameters
@@ -67,6 +72,10 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     plant : Plant, optional
         A prebuilt :class:`~flexlift.ascent.plant.Plant` (default: built from the scenario,
         the paper's plant in paper mode).
+    step_control : bool, optional
+        While every holding group is held, advance the mechanics in steps of up to
+        ``HELD_STEP_S`` (:func:`held_steps`; the gas, control, holding force and separation
+        stay on every time step); False: every step alike (default True).
 
     Returns
     -------
@@ -98,7 +107,19 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     refuse_unworkable(scenario, plant)
     if duration is None:
         warn_short(scenario, plant)
-    return Ascent(scenario, plant, mode, T_end, engine).run(progress)
+    return Ascent(scenario, plant, mode, T_end, engine, step_control).run(progress)
+
+
+def held_steps(settings: Settings) -> int:
+    """Base steps per mechanics step while every group is held (:func:`flexlift.ascent.
+    kernel.held_block`): the largest divisor of the steps per recorded row (so every row is
+    a block's first step) whose length is at most ``HELD_STEP_S``; 1 (off) if none is
+    longer than one step."""
+    best = 1
+    for m in range(1, settings.k_out + 1):
+        if settings.k_out % m == 0 and m * settings.dt <= HELD_STEP_S + 1e-9:
+            best = m
+    return best
 
 
 class Ascent:
@@ -108,7 +129,8 @@ class Ascent:
     run's are ``controllers``, ``control_state``, ``state``, ``switches``, ``settings`` and
     ``recorder`` (:class:`~flexlift.ascent.records.LoopInputs`)."""
 
-    def __init__(self, scenario, plant: Plant, mode: str, T_end: float, engine):
+    def __init__(self, scenario, plant: Plant, mode: str, T_end: float, engine,
+                 step_control: bool = True):
         sim, lim, c = scenario.simulation, scenario.limits, scenario.control
         self.scenario, self.plant, self.mode = scenario, plant, mode
         modal, strips, bags, seabed = plant.modal, plant.strips, plant.bags, plant.seabed
@@ -124,7 +146,9 @@ class Ascent:
             v_limit=lim.ascent_velocity_m_s, v_down_limit=lim.descent_velocity_m_s,
             pitch_limit=math.radians(90.0 if lim.pitch_deg is None else lim.pitch_deg),
             top_limit=bags.water_depth - lim.surface_clearance_m - bags.top_offset,
-            external=self.external is not None)
+            external=self.external is not None, held_steps=1, held_margin=HELD_MARGIN)
+        if step_control:
+            self.settings = self.settings._replace(held_steps=held_steps(self.settings))
         self.state = new_run_state(modal.nr, bags.nb, strips.ns, seabed.ng)
         self.switches = new_switches(bags.nb, strips.ns)
         self.switches.current[0] = scenario.disturbance.current_m_s
