@@ -89,3 +89,24 @@ def test_a_held_block_divides_the_row_interval(dt, k_out, m):
     got = held_steps(_settings(dt, k_out))
     assert got == m
     assert k_out % got == 0 and (got == 1 or got * dt <= HELD_STEP_S + 1e-9)
+
+
+def test_blocks_end_before_the_uplift_nears_the_hold():
+    """Held blocks run early in the fill and have ended, with base steps, before the step of
+    the separation (the uplift within the margin of the hold)."""
+    from flexlift.ascent import kernel
+    from flexlift.ascent.loop import Ascent
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.ascent.state import F_HELD
+
+    sc = load_scenario("tanker")
+    plant = coupled_plant(sc)
+    t_sep = next(e["time_s"] for e in simulate(sc, plant=plant).events
+                 if e["kind"] == "separation")
+    dt = sc.simulation.time_step_s
+    for k, held in ((1005, True), (int(t_sep / dt) - 1, False)):
+        run = Ascent(sc, plant, "coordinated", 3000.0, "table")
+        run._room(k)
+        kernel.advance(run.inputs(), k)
+        assert bool(run.state.counters[1] & F_HELD) is held, k
+        assert not run.state.sep.any()
