@@ -93,6 +93,7 @@ from flexlift.ascent.state import (
     EV_TARGET_HELD,
     F_FRESH,
     F_HAVE_B,
+    F_HELD,
     F_LIFTOFF,
     F_LIMIT_D,
     F_LIMIT_P,
@@ -182,9 +183,13 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
     noise = switches.noise[k - switches.chunk[0]] if switches.chunk[0] >= 0 else switches.noise[0]
     cur = switches.current[0]
     bag_forces(plant, state.V, state.zd, switches.attached, cur, state.point)
-    w_min = strip_loads(plant, state.q, state.v, state.H, state.sep, cur, noise, state.w,
-                        state.wv, state.line, state.contact, state.active)
-    generalised_force(plant, state.line, state.point, state.b)
+    held = held_block(k, plant, state, switches, settings)
+    if held != 0 or k % settings.k_out == 0 or k % settings.k_str == 0:
+        w_min = strip_loads(plant, state.q, state.v, state.H, state.sep, cur, noise, state.w,
+                            state.wv, state.line, state.contact, state.active)
+        generalised_force(plant, state.line, state.point, state.b)
+    else:  # inside a held block: the structure's loads wait for the block's next step
+        w_min = state.w.min()
     if k % settings.k_out == 0:
         store_row(t, plant, controllers, control_state, state, switches, recorder)
     if k % settings.k_str == 0:
@@ -198,13 +203,46 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
     state.z_prev[:] = state.z
     state.work[4] = state.q
     state.work[5] = state.v
-    mechanics(plant, state, switches, settings, w_min, noise)
+    if held > 0:
+        held_mechanics(plant, state, held * settings.dt)
+    elif held < 0:
+        mechanics(plant, state, switches, settings, w_min, noise)
     finish_step(t, plant, state, switches, settings, recorder, noise)
     state.counters[0] = k + 1
     if k % 100 == 0 and not healthy(state):
         log_event(recorder, t + settings.dt, EV_NUMERICS, -1, 0.0)
         return RET_STOP
     return RET_DONE
+
+
+@jit
+def held_block(k, plant, state, switches, settings):
+    """Step control while every holding group is held (the fill and the pull): the structure
+    sits on its bilateral seabed springs and barely moves, so its mechanics advance once every
+    ``settings.held_steps`` base steps (a block: one step of the block's length taken at its
+    first step, :func:`held_mechanics`), while the gas, the control samples, the holding force and
+    separation stay on every base step. Returns the block's length in base steps at a block's
+    first step, 0 at its other steps (no mechanics), -1 for a base step. A block starts only
+    on a multiple of ``held_steps`` (the recorded rows' steps, when it divides ``k_out``)
+    with no group separated, no force noise and every group's uplift below its hold by more
+    than ``settings.held_margin`` H_0; a separation inside a block ends it. Switching between
+    blocks and base steps restarts the force extrapolation (the step length changes)."""
+    m = settings.held_steps
+    flags = state.counters[1]
+    if m <= 1:
+        return -1
+    if flags & F_HELD and k % m != 0 and not state.sep.any():
+        return 0
+    start = k % m == 0 and switches.chunk[0] < 0 and not state.sep.any()
+    if start:
+        for g in range(plant.seabed.ng):
+            gap = group_uplift(plant, state.V, switches.attached, g) - state.H[g]
+            if gap >= -settings.held_margin * plant.seabed.H0[g]:
+                start = False
+                break
+    if start != bool(flags & F_HELD):
+        state.counters[1] = (flags ^ F_HELD) & ~F_HAVE_B
+    return m if start else -1
 
 
 @jit
@@ -424,6 +462,45 @@ def mechanics(plant, state, switches, settings, w_min, noise):
 
 
 @jit
+def held_mechanics(plant, state, h):
+    """The mechanics over a held block of ``h`` [s] (:func:`held_block`): one backward Euler
+    step (L-stable: the stiff held seabed springs do not ring at the block's length, as they
+    would under the trapezoidal rule) with the explicit force extrapolated to the block's end
+    from the previous block's, which makes it exact while the loads change linearly."""
+    b_end = state.work[0]
+    have_b = state.counters[1] & F_HAVE_B
+    for i in range(plant.modal.nr):
+        b_end[i] = 2.0 * state.b[i] - state.b_prev[i] if have_b else state.b[i]
+    _implicit_matrix(plant, state, 2.0 * h)  # inverse of I + h C + h^2 K
+    backward_euler_step(plant, state.q, state.v, b_end, h, state.implicit, state.stiff,
+                        state.damp, state.work[3])
+    state.b_prev[:] = state.b
+    state.counters[1] |= F_HAVE_B
+
+
+@jit
+def backward_euler_step(plant, q, v, b_end, h, implicit, stiff, damp, work):
+    """Advance q, q' by ``h`` [s] in place by backward Euler (every force but ``b_end``, the
+    others' value at the step's end, implicit); ``implicit`` the inverse of I + h C + h^2 K
+    (:func:`flexlift.ascent.mechanics.implicit_matrix` of 2 h); ``work`` (nr,) scratch."""
+    modal = plant.modal
+    nr = modal.nr
+    for i in range(nr):  # work = h (b - K q - C v) - h^2 K v
+        s = b_end[i] - modal.omega2[i] * q[i] - modal.damping[i] * v[i]
+        kv = modal.omega2[i] * v[i]
+        for j in range(nr):
+            s -= stiff[i, j] * q[j] + damp[i, j] * v[j]
+            kv += stiff[i, j] * v[j]
+        work[i] = h * s - h * h * kv
+    for i in range(nr):
+        dv = 0.0
+        for j in range(nr):
+            dv += implicit[i, j] * work[j]
+        v[i] += dv
+        q[i] += h * v[i]
+
+
+@jit
 def _loads_at_state(plant, state, switches, noise):
     """The loads of the current (sub-step) state, into ``state``."""
     bag_motion(plant, state.q, state.v, state.z, state.zd)
@@ -440,6 +517,15 @@ def _implicit_step(plant, state, h, b_mid):
     """One trapezoidal step of ``h`` [s]; the implicit matrix rebuilt when the contact
     pattern or the step length changed (the contact springs of the strips that changed
     added or taken away)."""
+    _implicit_matrix(plant, state, h)
+    trapezoidal_step(plant, state.q, state.v, b_mid, h, state.implicit, state.stiff,
+                     state.damp, state.work[3])
+
+
+@jit
+def _implicit_matrix(plant, state, h):
+    """The cached implicit matrix of :func:`_implicit_step` for a step of ``h`` [s], rebuilt
+    when the contact pattern or ``h`` changed."""
     valid = bool(state.counters[1] & F_MATRIX)
     changed = not valid
     if valid:
@@ -457,8 +543,6 @@ def _implicit_step(plant, state, h, b_mid):
         state.last_active[:] = state.active
         state.scalars[3] = h
         state.counters[1] |= F_MATRIX
-    trapezoidal_step(plant, state.q, state.v, b_mid, h, state.implicit, state.stiff,
-                     state.damp, state.work[3])
 
 
 @jit

@@ -50,11 +50,15 @@ MODES = ("decentralized", "coordinated", "paper", "open-loop")
 CHUNK_STEPS = 2000
 #: simulation.duration_s: auto: the record first holds this much of the run [s]
 AUTO_FIRST_S = 10_000.0
+#: step control while every group is held: the longest mechanics step [s] ...
+HELD_STEP_S = 1.0
+#: ... taken only while every group's uplift is below its hold by this fraction of its H_0
+HELD_MARGIN = 0.05
 
 
 def simulate(scenario, control: str | None = None, duration: float | None = None,
              engine="table", progress=None, plant: Plant | None = None,
-             share: bool = True) -> Result:
+             share: bool = True, step_control: bool = True) -> Result:
     """Simulate the ascent of ``scenario``.
 
     Parameters
@@ -80,6 +84,10 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
         Identical bags at one lift point share the compiled loop's work (default;
         :mod:`flexlift.ascent.clusters`); False: the loop keeps every bag on its own (the same
         results, to rounding).
+    step_control : bool, optional
+        While every holding group is held, advance the mechanics in steps of up to
+        ``HELD_STEP_S`` (:func:`held_steps`; the gas, control, holding force and separation
+        stay on every time step); False: every step alike (default True).
 
     Returns
     -------
@@ -111,7 +119,19 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     refuse_unworkable(scenario, plant)
     if duration is None:
         warn_short(scenario, plant)
-    return Ascent(scenario, plant, mode, T_end, engine, share).run(progress)
+    return Ascent(scenario, plant, mode, T_end, engine, share, step_control).run(progress)
+
+
+def held_steps(settings: Settings) -> int:
+    """Base steps per mechanics step while every group is held (:func:`flexlift.ascent.
+    kernel.held_block`): the largest divisor of the steps per recorded row (so every row is
+    a block's first step) whose length is at most ``HELD_STEP_S``; 1 (off) if none is
+    longer than one step."""
+    best = 1
+    for m in range(1, settings.k_out + 1):
+        if settings.k_out % m == 0 and m * settings.dt <= HELD_STEP_S + 1e-9:
+            best = m
+    return best
 
 
 class Ascent:
@@ -124,10 +144,12 @@ class Ascent:
     Identical bags at one lift point share a bag of the loop (``share``, default True;
     :mod:`flexlift.ascent.clusters`): ``records`` are the plant's records as the loop reads
     them, ``clusters`` which bags share; during the run the state, switches and record hold
-    one entry per loop bag, and once it ends one per bag of the plant."""
+    one entry per loop bag, and once it ends one per bag of the plant. ``step_control``
+    (default True): while every holding group is held, the mechanics advance in blocks of
+    :func:`held_steps` base steps (:func:`flexlift.ascent.kernel.held_block`)."""
 
     def __init__(self, scenario, plant: Plant, mode: str, T_end: float, engine,
-                 share: bool = True):
+                 share: bool = True, step_control: bool = True):
         sim, lim, c = scenario.simulation, scenario.limits, scenario.control
         self.scenario, self.plant, self.mode = scenario, plant, mode
         dt = sim.time_step_s
@@ -148,7 +170,9 @@ class Ascent:
             v_limit=lim.ascent_velocity_m_s, v_down_limit=lim.descent_velocity_m_s,
             pitch_limit=math.radians(90.0 if lim.pitch_deg is None else lim.pitch_deg),
             top_limit=bags.water_depth - lim.surface_clearance_m - bags.top_offset,
-            external=self.external is not None)
+            external=self.external is not None, held_steps=1, held_margin=HELD_MARGIN)
+        if step_control:
+            self.settings = self.settings._replace(held_steps=held_steps(self.settings))
         self.state = new_run_state(modal.nr, bags.nb, strips.ns, seabed.ng)
         self.switches = new_switches(bags.nb, strips.ns)
         self.switches.current[0] = scenario.disturbance.current_m_s

@@ -270,7 +270,10 @@ def build_result(run, error: str | None) -> Result:
         data["slope_largest"] = (("time_strength",), np.abs(bed["slope"]).max(1), {
             "units": "rad", "long_name": "largest slope along the structure"})
     events = event_list(run)
-    daf = amplification(xr.Dataset(data, coords=coords), events, run.scenario, P, run.mode)
+    # what the amplification reads (the sling forces over time), not a second whole Dataset
+    daf = amplification(xr.Dataset({"sling_force": data["sling_force"]},
+                                   coords={"time": coords["time"], "bag": coords["bag"]}),
+                        events, run.scenario, P, run.mode)
     for name, long in DAF_VARS.items():
         data[name] = (("bag",), daf[name], {"units": "1" if name.startswith("daf") else "N",
                                              "long_name": long})

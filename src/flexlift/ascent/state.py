@@ -44,6 +44,10 @@ class Settings(NamedTuple):
     pitch_limit: float  # pitch limit [rad]
     top_limit: np.ndarray  # (nb,) a bag point above this breaches the surface [m]
     external: bool  # the supervisor is evaluated outside the compiled loop
+    held_steps: int  # step control while every group is held: base steps per mechanics
+    #                  step (1: off; kernel.held_block)
+    held_margin: float  # ... only while every group's uplift is below its hold by this
+    #                     fraction of its H_0 [-]
 
 
 class Switches(NamedTuple):
@@ -120,6 +124,8 @@ class RunState(NamedTuple):
 # flags in RunState.counters[1]
 F_HAVE_B, F_MATRIX, F_LIFTOFF, F_RESETTLE, F_OBSERVED, F_LIMIT_V, F_LIMIT_P, F_FRESH, F_LIMIT_D = (
     1, 2, 4, 8, 16, 32, 64, 128, 256)
+#: flag: the step is inside a held block of step control (its mechanics already advanced)
+F_HELD = 512
 
 
 class Record(NamedTuple):

@@ -19,6 +19,7 @@ where a stiff contact spring changes from strip to strip (a held stretch beside 
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,6 +50,23 @@ def strip_cells(plant) -> np.ndarray:
 
 
 def strength_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`plant_grid` of ``plant``, kept for the last plant asked (a run's strength and
+    seabed profile, and the next cases of a sweep that reuse the plant, ask again)."""
+    global _LAST_GRID
+    ref, grid = _LAST_GRID
+    if ref is None or ref() is not plant:
+        grid = plant_grid(plant)
+        for a in grid:
+            a.flags.writeable = False  # shared by the runs of the plant
+        _LAST_GRID = (weakref.ref(plant), grid)
+    return grid
+
+
+#: (a weak reference to the plant, its strength grid) of the last :func:`strength_grid`
+_LAST_GRID: tuple = (None, None)
+
+
+def plant_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Grid x [m] along the structure to integrate the statics on (internal bags' span ends
     and the strips' cell edges doubled: the jumps of their loads), the evaluation points just
     aft/forward of them [m], and the indices of the points whose values are stored: an even
@@ -66,8 +84,10 @@ def strength_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     x = np.sort(np.concatenate([base, ends, ends]))
     side = np.zeros_like(x)
     stored = np.zeros(x.size, dtype=bool)
-    for e in ends:
-        k = np.flatnonzero(np.isclose(x, e))
+    for e in ends:  # the points np.isclose(x, e) (x sorted: a run of them, found by bisection)
+        tol = 1e-8 + 1e-5 * abs(e)
+        lo, hi = np.searchsorted(x, e - 2.0 * tol), np.searchsorted(x, e + 2.0 * tol, "right")
+        k = lo + np.flatnonzero(np.abs(x[lo:hi] - e) <= tol)
         side[k[0]], side[k[-1]] = -1.0, 1.0
         stored[k] = e in spans
     on_base = np.searchsorted(x, base[::refine])  # the first of any equal values
