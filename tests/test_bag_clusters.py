@@ -24,8 +24,9 @@ SCENARIO = Path(__file__).resolve().parents[1] / "benchmarks" / "bags_tanker.yam
 #: one of a fill started a sample earlier or later
 WINDOW_S = 3300.0
 #: relative to each variable's largest magnitude (measured: the state 1e-12, the commands
-#: 1e-10, with the compressor's limit 3e-9, just after the separation)
-RTOL = 1e-8
+#: 1e-10, with the compressor's limit 3e-9 every step alike and 1.6e-8 with the step control
+#: while held, just after the separation; a wrong count is of order 1)
+RTOL = 1e-7
 
 
 @pytest.fixture(scope="module")

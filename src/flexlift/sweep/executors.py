@@ -213,8 +213,10 @@ class DaskEngine:
         except ImportError:
             raise InputError.from_line(
                 "--scheduler/--dask-local need Dask: pip install 'flexlift[dask]'") from None
-        # Dask's own records of a lost connection are tracebacks; the sweep says it in one line
-        self._log_levels = _quiet("distributed")
+        # Dask's own records of a lost connection are tracebacks (its loggers' and those of
+        # tornado, its event loop, on a stream closed under a callback); the sweep says it in
+        # one line
+        self._log_levels = {**_quiet("distributed"), **_quiet("tornado")}
         if timeout is None:  # Dask's own setting (DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT)
             timeout = parse_timedelta(dask.config.get("distributed.comm.timeouts.connect"), "s")
         self.cluster = None
