@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from flexlift.errors import InputError
 from flexlift.loads.clusters import across, cluster_faults, cluster_lengths
 from flexlift.physics.gas import expansion_rate
+from flexlift.scenario.valves import external_valve
 
 #: GL Noble Denton 0027/ND Table 11-1: consequence factor of lift points and their attachments
 CONSEQUENCE_LIFT_POINT = 1.30
@@ -118,10 +119,14 @@ _EXCESS = {"open_parachute": "a full open bag spills the rest from its mouth, bu
 
 
 def dump_valve_check(scenario, plan) -> Check:
-    """The catalogue bag's dump valve against the expansion of a full bag's gas (its true
-    capacity) rising at the planned speed at the target, per type (what the gas it cannot pass
-    does: ``_EXCESS``); with the speed it can hold and the valve it would need."""
-    bag, c, gas = scenario.lift.catalogue_bag, scenario.control, scenario.gas
+    """The dump valve the run uses (:func:`flexlift.scenario.valves.external_valve`: the user's
+    ``gas.purge_rate_max_m3_s``, else the catalogue bag's, else the assumed one) against the
+    expansion of a full bag's gas (its true capacity) rising at the planned speed at the
+    target, per type (what the gas it cannot pass does: ``_EXCESS``); with the speed it can
+    hold and the valve it would need. A bag whose catalogue entry gives no valve passes with
+    a note (the purge-capacity check then judges the run's valve)."""
+    bag, c = scenario.lift.catalogue_bag, scenario.control
+    used = external_valve(scenario)
     if not plan.external:
         return Check("dump_valve", True, "no external bags: no dump valve to size")
     volume = max(b.capacity for b in plan.external)
@@ -129,22 +134,24 @@ def dump_valve_check(scenario, plan) -> Check:
     where = (f"a full bag ({volume:.3g} m3) rising at the planned {c.ascent_speed_m_s:g} m/s "
              f"at the {c.target_height_m:g} m target ({p / 1e5:.2f} bar) expands at "
              f"{rate:.3g} m3/s")
-    if bag.dump_valve_m3_s is None:
+    if bag.dump_valve_m3_s is None:  # the paper's cylinder, a bag without a maker's valve
         return Check("dump_valve", True, f"the bag's dump-valve capacity is not given; {where}; "
-                     f"the run takes gas.purge_rate_max_m3_s = {gas.purge_rate_max_m3_s:g} m3/s "
-                     "(the purge-capacity check); give lift.catalogue_bag.dump_valve_m3_s from "
-                     "its maker")
-    valve = bag.dump_valve_m3_s
+                     f"the run takes gas.purge_rate_max_m3_s = {used.m3_s:g} m3/s "
+                     f"({used.source}; the purge-capacity check); give "
+                     "lift.catalogue_bag.dump_valve_m3_s from its maker")
+    valve = used.m3_s
     ok = valve >= rate
-    msg = (f"{bag.type.replace('_', ' ')} bag: its dump valve passes {valve:.3g} m3/s; {where}"
+    whose = "its dump valve" if used.source == "catalogue" else "the user's dump valve"
+    msg = (f"{bag.type.replace('_', ' ')} bag: {whose} ({used.key}) passes {valve:.3g} m3/s; "
+           f"{where}"
            + (f" (margin {valve / rate:.2f})" if ok and rate > 0 else ""))
     if not ok:
         msg += (f": {_EXCESS[bag.type]}; lower control.ascent_speed_m_s to at most "
                 f"{c.ascent_speed_m_s * valve / rate:.3g} m/s, or use a dump valve of at least "
                 f"{rate:.3g} m3/s")
-    if gas.purge_rate_max_m3_s > valve:
-        msg += (f" (the run assumes gas.purge_rate_max_m3_s = {gas.purge_rate_max_m3_s:g} m3/s, "
-                "more than this valve)")
+    if used.source == "user" and bag.dump_valve_m3_s is not None and valve > bag.dump_valve_m3_s:
+        msg += (f" (more than the catalogue bag's {bag.dump_valve_m3_s:.3g} m3/s: the user's "
+                "valve is taken)")
     return Check("dump_valve", bool(ok), msg)
 
 

@@ -241,7 +241,7 @@ def purge_check(scenario, plant) -> Check:
     if not ext.size:
         return Check("purge_capacity", True, "no external bags: nothing to purge")
     z = np.linspace(0.0, c.target_height_m, 2001)
-    lim = np.min([speed_limit(z, plant.neutral_volume[i], plant.bags.capacity[i], plant.bags.purge_max,
+    lim = np.min([speed_limit(z, plant.neutral_volume[i], plant.bags.capacity[i], plant.bags.purge_max[i],
                               c.purge_margin, plant.bags.water_depth, plant.bags.p_atm, plant.bags.rho_g) for i in ext], axis=0)
     slow = lim < c.ascent_speed_m_s
     if not slow.any():

@@ -422,7 +422,7 @@ def rates(plant, state, switches):
     for i in range(plant.bags.nb):
         fill = state.fill[i] * switches.supply[i]
         purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],
-                           plant.bags.purge_max)
+                           plant.bags.purge_max[i])
         state.ndot[i] = (moles_rate(state.p[i], fill, purge, plant.bags.RT)
                          - switches.leak[i] * state.n[i])
         state.flow0[0, i], state.flow0[1, i] = state.p[i], purge
@@ -593,7 +593,7 @@ def _gas_step(i, dt, plant, state, switches):
     p1 = ambient_pressure(state.z[i], bags.water_depth, bags.p_atm, bags.rho_g)
     n_pred = max(state.n[i] + dt * state.ndot[i], 0.0)
     purge1 = purge_flow(state.opening[i], gas_volume(n_pred, p1, bags.RT, bags.capacity[i]),
-                        bags.capacity[i], bags.purge_max)
+                        bags.capacity[i], bags.purge_max[i])
     ndot1 = moles_rate(p1, fill, purge1, bags.RT) - switches.leak[i] * n_pred
     state.gas_local[i] += fill * dt
     state.gas_free[i] += 0.5 * (free_air(fill * dt, p0, bags.p_atm)

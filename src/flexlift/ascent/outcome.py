@@ -83,7 +83,7 @@ def remaining_ascent_s(scenario, plant, z_from: float, from_rest: bool = True) -
     z = np.linspace(z_from, c.target_height_m, 401)
     v = np.full(z.size, c.ascent_speed_m_s)
     for i in np.flatnonzero(plant.external):
-        v = np.minimum(v, speed_limit(z, plant.neutral_volume[i], a.capacity[i], a.purge_max,
+        v = np.minimum(v, speed_limit(z, plant.neutral_volume[i], a.capacity[i], a.purge_max[i],
                                       c.purge_margin, a.water_depth, a.p_atm, a.rho_g))
     v = np.maximum(v, 1e-6)
     inv = 1.0 / v

@@ -86,7 +86,7 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
         body_diameter=pb.body_diameter[ext].copy(), body_length=pb.body_length[ext].copy(),
         cone_top=pb.cone_top[ext].copy(), tip_freeboard=pb.tip_freeboard[ext].copy(),
         top_offset=pb.top_offset[ext].copy(), drag=pb.drag[ext].copy(),
-        purge_max=pb.purge_max, supply_free_air=pb.supply_free_air, RT=pb.RT, p_atm=pb.p_atm,
+        purge_max=pb.purge_max[ext].copy(), supply_free_air=pb.supply_free_air, RT=pb.RT, p_atm=pb.p_atm,
         rho_g=pb.rho_g,
         water_depth=pb.water_depth, corr_shape=eye, corr_weight=-W * D,
         slope_shape=np.zeros((ne, ne)), slope_weight=np.zeros(ne),

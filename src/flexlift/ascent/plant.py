@@ -47,6 +47,7 @@ from flexlift.control.sequence import stage_groups
 from flexlift.errors import InputError
 from flexlift.loads.liftplan import LiftPlan, plan_lift
 from flexlift.physics import gas, hydro, seabed
+from flexlift.scenario.valves import external_valve
 from flexlift.structure.beam import assemble
 from flexlift.structure.hull import Hull, hull_from_scenario
 from flexlift.structure.modes import Modes, compute_modes
@@ -333,7 +334,10 @@ def strip_record(scenario, hull: Hull, nr: int, lay: Layout, hold: Holding) -> S
 def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
                hold: Holding) -> Bags:
     """The bags: their points on the retained modes, their gas and its laws' constants, drag
-    and the static correction of the eliminated modes at their points."""
+    and the static correction of the eliminated modes at their points. The external bags
+    purge through the catalogue bag's dump valve (:func:`flexlift.scenario.valves.external_valve`:
+    the user's ``gas.purge_rate_max_m3_s`` first), the internal ones through
+    ``gas.purge_rate_max_m3_s``."""
     rho, hy = scenario.environment.seawater_density_kg_m3, scenario.hydro
     external, capacity, psi_p, dpsi_p, psi_b = (lay.external, lay.capacity, lay.psi_p,
                                                 lay.dpsi_p, lay.psi_b)
@@ -348,7 +352,8 @@ def bag_record(scenario, hull: Hull, modes: Modes, nr: int, lay: Layout,
         group=hold.bag_group, capacity=capacity, **bag_bodies(scenario, hull, external, capacity),
         drag=np.where(external, hydro.drag_coefficient(
             rho, hy.bag_drag_coefficient, 1.0) * hydro.sphere_frontal_area(capacity), 0.0),
-        purge_max=scenario.gas.purge_rate_max_m3_s,
+        purge_max=np.where(external, external_valve(scenario).m3_s,
+                           scenario.gas.purge_rate_max_m3_s),
         supply_free_air=(scenario.gas.supply_free_air_m3_min or 0.0) / 60.0,
         **gas_constants(scenario),
         corr_shape=cs, corr_weight=cw, slope_shape=ss, slope_weight=sw,

@@ -56,7 +56,7 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
     for i in range(nb):
         fill = state.fill[i] * switches.supply[i]
         purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],
-                           plant.bags.purge_max)
+                           plant.bags.purge_max[i])
         out[0, i], out[1, i], out[2, i], out[3, i] = z[i], state.zd[i], slope[i], rate[i]
         out[4, i], out[5, i], out[6, i], out[7, i] = (fill - purge, state.V[i], state.point[i],
                                                       fill)

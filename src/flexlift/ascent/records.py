@@ -115,7 +115,7 @@ class Bags(NamedTuple):
     tip_freeboard (nb,)       m           an open bag tips past this freeboard (inf: never)
     top_offset (nb,)          m           height of a bag's top above the hull bottom
     drag (nb,)                kg/m        bag drag coefficient 1/2 rho C_D,bag A
-    purge_max                 m^3/s       the purge valves' largest flow Q_out,max
+    purge_max (nb,)           m^3/s       each bag's purge valve's largest flow Q_out,max
     supply_free_air           m^3/s       a compressor's free-air delivery shared by the bags
                                           (0: no compressor limit; the commanded fill at depth)
     RT                        J/mol       R T of the gas at the sea's temperature
@@ -165,7 +165,7 @@ class Bags(NamedTuple):
     tip_freeboard: np.ndarray
     top_offset: np.ndarray
     drag: np.ndarray
-    purge_max: float
+    purge_max: np.ndarray
     supply_free_air: float
     RT: float
     p_atm: float

@@ -50,7 +50,7 @@ def planned_profile(scenario, plant):
     if not bags.size:
         return None
     return valve_profile(c.target_height_m, c.ascent_speed_m_s, c.ascent_acceleration_m_s2,
-                         plant.neutral_volume[bags], plant.bags.capacity[bags], plant.bags.purge_max,
+                         plant.neutral_volume[bags], plant.bags.capacity[bags], plant.bags.purge_max[bags],
                          c.purge_margin, plant.bags.water_depth, plant.bags.p_atm, plant.bags.rho_g)
 
 

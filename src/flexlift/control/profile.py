@@ -48,11 +48,13 @@ def speed_limit(z, V, capacity, purge_max, eta, water_depth, p_atm, rho_g):
 def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth, p_atm,
                   rho_g) -> Profile | None:
     """The fastest ascent to ``target`` [m] within ``speed`` [m/s], ``accel`` [m/s^2] and
-    the tightest bag's :func:`speed_limit` (``V``, ``capacity``: arrays over the bags); None
-    when the limit never binds."""
+    the tightest bag's :func:`speed_limit` (``V``, ``capacity``, ``purge_max``: arrays over
+    the bags, ``purge_max`` each bag's dump valve); None when the limit never binds."""
     z = np.linspace(0.0, target, HEIGHTS)
-    lim = np.min([speed_limit(z, v, c, purge_max, eta, water_depth, p_atm, rho_g)
-                  for v, c in zip(np.atleast_1d(V), np.atleast_1d(capacity))], axis=0)
+    V = np.atleast_1d(V)
+    q = np.broadcast_to(np.asarray(purge_max, dtype=float), V.shape)
+    lim = np.min([speed_limit(z, v, c, qi, eta, water_depth, p_atm, rho_g)
+                  for v, c, qi in zip(V, np.atleast_1d(capacity), q)], axis=0)
     if np.all(lim >= speed):
         return None
     cap = np.minimum(lim, speed)

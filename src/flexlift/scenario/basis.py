@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-from flexlift.scenario import catalogue
+from flexlift.scenario import catalogue, valves
 from flexlift.scenario.defaults import POLICY, own_structure, set_in
 
 __all__ = ["design_basis", "in_air_daf", "DAF_TABLE", "CONSEQUENCE_LIFT_POINT"]
@@ -96,7 +96,16 @@ def _catalogue_rows(scenario) -> list[dict]:
             f"{bag.length_m:g} m, relief {_show(bag.relief_bar, 'bar')}, working pressure "
             f"{_show(bag.working_pressure_bar, 'bar')}, dump valve "
             f"{_show(bag.dump_valve_m3_s, 'm3/s')}, rated depth {_show(bag.rated_depth_m, 'm')}")
+    used = valves.external_valve(scenario)
+    why = {"user": "gas.purge_rate_max_m3_s given: it replaces the catalogue's valve",
+           "catalogue": "the catalogue bag's dump_valve_m3_s (a generic entry: a full bag's "
+                        "volume in 120 s, assumed; a maker's figure replaces it)",
+           "assumed": POLICY[valves.KEY][1] + "; the bag's catalogue entry gives none",
+           "paper": "the paper's large dump valve"}[used.source]
     return [_row("lift bag (catalogue entry)", dims, src, note),
+            _row("dump valve of each external bag, in the run (fully open, bag full)",
+                 f"{used.m3_s:g} m3/s", used.source,
+                 why + "; internal bags: gas.purge_rate_max_m3_s"),
             _row("capacity factor (true over rated gas capacity)", bag.capacity_factor,
                  source(scenario, "lift.catalogue_bag.capacity_factor"),
                  "the bag-count rule decides how many bags; this factor their gas capacity")]
@@ -158,7 +167,8 @@ def design_basis(scenario, weight_t: float | None = None) -> list[dict]:
               f"each bag at most {scenario.gas.fill_rate_max_m3_s:g} m3/s at its depth")),
     ]
     shown = {"lift.breakout_factor", "limits.pitch_deg", "hull.allowable_stress_MPa",
-             "gas.fill_rate_max_m3_s", "lift.catalogue_bag"}  # the bag: its own row above
+             "gas.fill_rate_max_m3_s", "lift.catalogue_bag",  # the bag: its own row above
+             "gas.purge_rate_max_m3_s"}  # the dump valve: its own row above
     for key, how in (scenario.defaulted or {}).items():
         if key not in shown:
             try:

@@ -16,9 +16,13 @@ variable                                law (nominal: the scenario's value)     
 ``hull.submerged_weight_t``             uniform 0.9-1.1 x nominal W'              the user's
 ``disturbance.current_m_s``             uniform nominal -/+ 0.25 m/s              assumed
 ``gas.fill_rate_max_m3_s``              uniform 0.8-1.2 x nominal                 assumed
-``gas.purge_rate_max_m3_s``             uniform 0.8-1.2 x nominal                 assumed
+``gas.purge_rate_max_m3_s`` (*)         uniform 0.8-1.2 x nominal                 assumed
 ``gas.supply_free_air_m3_min``          uniform 0.8-1.0 x nominal (when stated)   assumed
 ======================================  ========================================  ==========
+
+(*) the key that sets the external bags' dump valve in the run
+(:func:`flexlift.scenario.valves.external_valve`): ``lift.catalogue_bag.dump_valve_m3_s`` when
+the catalogue bag's valve governs.
 
 The soil's breakout force is H0 = (breakout_factor - 1) W' (docs/theory/seabed.md); the
 R-755 band (+-50 %, NCEL R-755, Lee 1973) is on H0, the soil's force, not on the total lift
@@ -36,6 +40,7 @@ import math
 from dataclasses import dataclass
 
 from flexlift.errors import InputError, brief
+from flexlift.scenario.valves import external_valve
 from flexlift.sweep.distributions import Distribution, parse_distribution
 from flexlift.sweep.keys import Key, check_key
 
@@ -57,6 +62,7 @@ SOURCES = {
     "disturbance.current_m_s": "assumed: +-0.25 m/s about the nominal current",
     "gas.fill_rate_max_m3_s": "assumed: fill valves +-20 % of their rating",
     "gas.purge_rate_max_m3_s": "assumed: dump valves +-20 % of their rating",
+    "lift.catalogue_bag.dump_valve_m3_s": "assumed: dump valves +-20 % of their rating",
     "gas.supply_free_air_m3_min": "assumed: a compressor delivers 80-100 % of its rated free air",
 }
 
@@ -136,6 +142,7 @@ def pin_plan(base, where: str):
 def default_laws(base, wet_t: float) -> dict:
     """{variable: its law as a SPEC mapping} of the salvage study for ``base`` (pinned)."""
     sb, gas, cur = base.seabed, base.gas, base.disturbance.current_m_s
+    valve = external_valve(base)  # the dump valve the run takes, by the key that sets it
     laws = {SOIL: {"dist": "uniform", "low": 0.5, "high": 1.5},
             "seabed.breakout_time_s": {"dist": "loguniform", "low": 0.5 * sb.breakout_time_s,
                                        "high": 2.0 * sb.breakout_time_s},
@@ -146,8 +153,7 @@ def default_laws(base, wet_t: float) -> dict:
                                         "high": min(5.0, cur + 0.25)},
             "gas.fill_rate_max_m3_s": {"dist": "uniform", "low": 0.8 * gas.fill_rate_max_m3_s,
                                        "high": 1.2 * gas.fill_rate_max_m3_s},
-            "gas.purge_rate_max_m3_s": {"dist": "uniform", "low": 0.8 * gas.purge_rate_max_m3_s,
-                                        "high": 1.2 * gas.purge_rate_max_m3_s}}
+            valve.key: {"dist": "uniform", "low": 0.8 * valve.m3_s, "high": 1.2 * valve.m3_s}}
     if gas.supply_free_air_m3_min is not None:
         laws["gas.supply_free_air_m3_min"] = {"dist": "uniform",
                                               "low": 0.8 * gas.supply_free_air_m3_min,

@@ -4,7 +4,9 @@ The scale is uniform: on the surviving bags' true gas capacity (the plan pinned 
 ``lift.bags``, one entry per bag, and every bag but the failed one given its ``capacity_factor``
 times the scale: :func:`scale_changes`; a pipeline's bags come from ``pipe:``, so there every
 bag's factor, ``lift.catalogue_bag.capacity_factor``, is scaled, the failed one's too) or, for
-a dump valve stuck closed, on the purge valves' capacity (``gas.purge_rate_max_m3_s``). The case is run first at
+a dump valve stuck closed, on the external bags' dump valve as the run takes it
+(:func:`flexlift.scenario.valves.external_valve`: ``gas.purge_rate_max_m3_s`` or the catalogue
+bag's ``dump_valve_m3_s``). The case is run first at
 the cap (:data:`CAP`): if it still fails the margin is "> cap"; else the smallest surviving
 scale is bisected between 1 and the cap, to 1 % of the scale or 1 t of the plan's capacity
 (whichever comes first), in at most :data:`MAX_RUNS` runs in all. The margin is the smallest
@@ -36,7 +38,10 @@ def scale_changes(what: str, scale: float, scenario, failed: str | None = None,
     capacity; or, with the plan ``pinned`` (:func:`pinned_bags`), the true capacity of every
     bag but ``failed`` (the survivors); without it (a pipeline) every bag's."""
     if what == "dump_valve":
-        return {"gas.purge_rate_max_m3_s": scenario.gas.purge_rate_max_m3_s * scale}
+        from flexlift.scenario.valves import external_valve
+
+        valve = external_valve(scenario)  # the valve the run uses, by the key that sets it
+        return {valve.key: valve.m3_s * scale}
     default = scenario.lift.catalogue_bag.capacity_factor
     if pinned is None:
         return {"lift.catalogue_bag.capacity_factor": default * scale}
