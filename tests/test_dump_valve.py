@@ -60,7 +60,7 @@ def test_a_catalogue_bags_run_purges_at_most_its_dump_valve(catalogue):
     plant = coupled_plant(catalogue)
     assert np.all(plant.bags.purge_max[plant.external] == VALVE)
     r = simulate(catalogue)
-    assert r.criteria["reached_target"]
+    assert all(r.criteria.values()), r.criteria  # a fifth of the assumed valve is enough here
     q = np.nanmax(_purged(r))
     assert 0.5 * VALVE < q <= VALVE * (1 + 1e-9)
 

@@ -85,7 +85,9 @@ POLICY: dict[str, tuple[str, str]] = {
                                 "until lift-off (the tanker's plan: 150 t of 835 t)"),
     "gas.fill_rate_max_m3_s": ("assumed", "0.5 m3/s of gas per bag at the bag's depth (a "
                                "compressor's free-air delivery is not stated)"),
-    "gas.purge_rate_max_m3_s": ("assumed", "2 m3/s through a bag's dump valve, fully open"),
+    "gas.purge_rate_max_m3_s": ("assumed", "2 m3/s through a bag's dump valve, fully open, "
+                                "when the catalogue bag gives no dump_valve_m3_s (its own "
+                                "valve is taken: scenario/valves.py)"),
     "hydro.drag_coefficient": ("assumed", "1.2 on the breadth (bluff hull sections 1-2)"),
     "hydro.added_mass_coefficient": ("assumed", "1.0 (a33 = Ca rho pi B^2/4 per length)"),
     "hydro.bag_drag_coefficient": ("assumed", "1.0 on a bag's frontal area"),
