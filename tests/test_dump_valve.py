@@ -137,3 +137,12 @@ def test_a_dump_valve_margin_scales_the_valve_the_run_uses(catalogue):
     tanker = load_scenario("tanker")
     assert scale_changes("dump_valve", 1.3, tanker) == {
         "gas.purge_rate_max_m3_s": pytest.approx(2.6)}
+
+
+def test_a_purge_rate_given_by_with_changes_is_the_users(catalogue):
+    """``with_changes`` (the API, a sweep's case) gives the key: it is no longer listed as
+    assumed, and it wins over the catalogue's valve as a file's would."""
+    given = catalogue.with_changes(**{"gas.purge_rate_max_m3_s": 0.5})
+    assert "gas.purge_rate_max_m3_s" not in given.defaulted
+    assert external_valve(given) == (0.5, "user", "gas.purge_rate_max_m3_s")
+    assert "hull.modal_damping" in given.defaulted  # the others stay assumed

@@ -671,8 +671,14 @@ class Scenario(_Section):
                 (("supervisor", c.supervisor.fis_file), ("fill", c.fill.fis_file)) if v}
 
     def with_changes(self, **dotted) -> Scenario:
-        """A copy with dotted keys changed, validated: ``s.with_changes(**{"hull.elements": 40})``."""
+        """A copy with dotted keys changed, validated: ``s.with_changes(**{"hull.elements": 40})``.
+        A key changed here that was assumed (``defaulted``) is given from then on (its
+        assumption no longer holds: the design basis calls it the user's)."""
         data = underive(self.model_dump(mode="json"))  # a pipe's derived keys derived anew
+        assumed = data.get("defaulted") or {}
+        for key in dotted:  # a value given here is no longer the assumed one
+            if assumed.get(key) == "assumed":
+                del assumed[key]
         for key, value in dotted.items():
             node = data
             *path, last = key.split(".")
