@@ -179,8 +179,8 @@ def strength(plant, snaps: dict):
     chunk = max(1, CHUNK_VALUES // x.size)
     for a in range(0, nt, chunk):
         part = {k: v[a:a + chunk] for k, v in snaps.items()}
-        Vc, Mc = shear_moment(x, line_loads(plant, xe, part, grid), point_loads(plant, part))
-        V[a:a + chunk], M[a:a + chunk] = Vc[:, keep], Mc[:, keep]
+        V[a:a + chunk], M[a:a + chunk] = shear_moment(
+            x, line_loads(plant, xe, part, grid), point_loads(plant, part), keep)
     return x[keep], V, M
 
 
