@@ -3,10 +3,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from flexlift.control.profile import _passes, valve_profile
 from flexlift.loads.strength import shear_moment
+
+TRAWLER = Path(__file__).parent / "data" / "trawler.yaml"
 
 
 def _passes_before(cap: np.ndarray, accel: float, dz: float) -> np.ndarray:
@@ -51,3 +55,68 @@ def test_shear_moment_at_kept_points_is_the_full_result_there():
     Vk, Mk = shear_moment(x, q, pts, keep)
     assert Vk.shape == (17, 60)
     assert np.array_equal(Vk, V[:, keep]) and np.array_equal(Mk, M[:, keep])
+
+
+CASE_B = {"gas.fill_rate_max_m3_s": 0.55, "gas.purge_rate_max_m3_s": 1.7,
+          "seabed.breakout_time_s": 300.0}
+CASE_A = {"gas.fill_rate_max_m3_s": 0.45, "gas.purge_rate_max_m3_s": 2.3,
+          "seabed.breakout_time_s": 300.0}
+
+_FRESH = """
+import json, sys
+from flexlift.scenario import load_scenario
+from flexlift.sweep.worker import Task, run_case
+changes = json.loads(sys.argv[1])
+record, _ = run_case(Task(1, load_scenario("tanker"), changes, ("coordinated",), False))
+print(json.dumps(record))
+"""
+
+
+def _plain(record: dict) -> dict:
+    return {k: v for k, v in record.items() if k not in ("elapsed_s", "pid", "host")}
+
+
+def test_a_case_after_another_is_the_case_in_a_fresh_process():
+    """The worker's caches (plan, plant, strength grid) warm from another case give the
+    record a cold process gives, number for number."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from flexlift.scenario import load_scenario
+    from flexlift.sweep.worker import Task, run_case
+
+    base = load_scenario("tanker")
+    run_case(Task(0, base, CASE_A, ("coordinated",), False))
+    warm, _ = run_case(Task(1, base, CASE_B, ("coordinated",), False))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    out = subprocess.run([sys.executable, "-c", _FRESH, json.dumps(CASE_B)], env=env,
+                         capture_output=True, text=True, timeout=600, check=True)
+    cold = json.loads(out.stdout.strip().splitlines()[-1])
+    assert warm["status"] == "completed"
+    assert _plain(json.loads(json.dumps(warm))) == _plain(cold)
+
+
+def test_the_strength_grid_is_shared_by_plants_of_the_same_hull_and_bags():
+    from flexlift.ascent import strength as S
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.scenario import load_scenario
+
+    base = load_scenario("tanker")
+    a = coupled_plant(base.with_changes(**CASE_A))
+    b = coupled_plant(base.with_changes(**CASE_B))
+    assert a is not b and S.grid_key(a) == S.grid_key(b)
+    assert S.strength_grid(a) is S.strength_grid(b)
+    for got, want in zip(S.strength_grid(b), S.plant_grid(b)):
+        assert np.array_equal(got, want)
+    # other hulls and meshes after the tanker's grid is kept: each its own grid
+    others = [base.with_changes(**{"hull.elements": base.hull.elements + 4}),
+              base.with_changes(**{"simulation.retained_flexible_modes":
+                                   base.simulation.retained_flexible_modes + 2}),
+              load_scenario(str(TRAWLER))]
+    for sc in others:
+        p = coupled_plant(sc)
+        assert S.grid_key(p) != S.grid_key(a)
+        for got, want in zip(S.strength_grid(p), S.plant_grid(p)):
+            assert np.array_equal(got, want)
