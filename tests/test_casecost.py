@@ -6,11 +6,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from flexlift.control.profile import _passes, valve_profile
 from flexlift.loads.strength import shear_moment
 
 TRAWLER = Path(__file__).parent / "data" / "trawler.yaml"
+BAGS = Path(__file__).resolve().parents[1] / "benchmarks" / "bags_tanker.yaml"
 
 
 def _passes_before(cap: np.ndarray, accel: float, dz: float) -> np.ndarray:
@@ -120,3 +122,23 @@ def test_the_strength_grid_is_shared_by_plants_of_the_same_hull_and_bags():
         assert S.grid_key(p) != S.grid_key(a)
         for got, want in zip(S.strength_grid(p), S.plant_grid(p)):
             assert np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("mode", ["decentralized", "coordinated"])
+def test_all_cluster_keys_at_once_are_each_bags_key(mode):
+    """The 73-bag plan (8 alike at each lift point), the pipeline's internal bags and the
+    tanker: the keys built at once are each bag's :func:`cluster_key`, byte for byte."""
+    from flexlift.ascent.clusters import cluster_key, cluster_keys
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.control.build import controller_for, fuzzy_maps
+    from flexlift.scenario import load_scenario
+
+    fifty = load_scenario(str(BAGS)).with_changes(**{"lift.catalogue_bag.lift_t": 50.0})
+    for sc in (fifty, load_scenario("pipeline"), load_scenario("tanker")):
+        P = coupled_plant(sc)
+        table, _, fill = fuzzy_maps(sc)
+        C = controller_for(sc, P, mode, table, fill)[0]
+        keys = cluster_keys(P, C)
+        assert keys == [cluster_key(P, C, i) for i in range(len(P.names))]
+        if sc is fifty:
+            assert len(set(keys)) < len(keys)  # the 73 bags do share
