@@ -90,6 +90,38 @@ def cluster_key(plant, controllers, i: int) -> bytes:
     return b"\x00".join(len(p).to_bytes(4, "little") + p for p in parts)
 
 
+def cluster_keys(plant, controllers) -> list[bytes]:
+    """:func:`cluster_key` of every bag of ``plant``, the same bytes, each per-bag field laid
+    out bag by bag once (not taken again for each bag: a 73-bag plan's keys in a fifth of the
+    time)."""
+    bags = plant.bags
+    nb = len(plant.names)
+    rows = []  # per field: its values bag by bag (bag axis first, contiguous)
+    for name, value in zip(bags._fields, bags):
+        ax = bag_axis(name, value, bags.nb)
+        if ax is not None and name != "count":
+            rows.append(np.ascontiguousarray(np.moveaxis(value, ax, 0)))
+    nc = controllers.bags.size
+    ctrl_rows = [value for name, value in zip(controllers._fields, controllers)
+                 if (isinstance(value, np.ndarray) and value.ndim and value.shape[0] == nc
+                     and name not in CONTROL_SHARED)]
+    first_ctrl = {}
+    for k, i in enumerate(controllers.bags.tolist()):
+        first_ctrl.setdefault(i, k)
+    out = []
+    for i in range(nb):
+        parts = [r[i].tobytes() for r in rows]
+        parts += [np.float64(plant.neutral_volume[i]).tobytes(), bytes([bool(plant.external[i])]),
+                  np.float64(plant.x_point[i]).tobytes(), repr(plant.spans[i]).encode()]
+        k = first_ctrl.get(i)
+        if k is not None:
+            parts += [np.ascontiguousarray(v[k]).tobytes() for v in ctrl_rows]
+        else:
+            parts.append(b"no controller")
+        out.append(b"\x00".join(len(p).to_bytes(4, "little") + p for p in parts))
+    return out
+
+
 def find_clusters(scenario, plant, controllers, share: bool = True) -> Clusters:
     """The loop bags of ``plant`` (module docstring); one per bag when ``share`` is False,
     with measurement noise, or when no two bags are alike."""
@@ -102,8 +134,9 @@ def find_clusters(scenario, plant, controllers, share: bool = True) -> Clusters:
     of_bag = np.empty(nb, dtype=np.int64)
     seen: dict[bytes, int] = {}
     first: list[int] = []
+    keys = cluster_keys(plant, controllers)
     for i, name in enumerate(plant.names):
-        key = b"fault " + name.encode() if name in faulted else cluster_key(plant, controllers, i)
+        key = b"fault " + name.encode() if name in faulted else keys[i]
         j = seen.setdefault(key, len(first))
         if j == len(first):
             first.append(i)

@@ -270,9 +270,10 @@ def build_result(run, error: str | None) -> Result:
         data["slope_largest"] = (("time_strength",), np.abs(bed["slope"]).max(1), {
             "units": "rad", "long_name": "largest slope along the structure"})
     events = event_list(run)
-    # what the amplification reads (the sling forces over time), not a second whole Dataset
-    daf = amplification(xr.Dataset({"sling_force": data["sling_force"]},
-                                   coords={"time": coords["time"], "bag": coords["bag"]}),
+    # what the amplification reads (the sling forces over time, the bags' names) as plain
+    # arrays: the values a Dataset of them would hold, without building one
+    daf = amplification(_Arrays(bag=np.array(coords["bag"][1]), time=t,
+                                sling_force=data["sling_force"][1]),
                         events, run.scenario, P, run.mode)
     for name, long in DAF_VARS.items():
         data[name] = (("bag",), daf[name], {"units": "1" if name.startswith("daf") else "N",
@@ -280,6 +281,21 @@ def build_result(run, error: str | None) -> Result:
     ds = xr.Dataset(data, coords=coords)
     _attributes(ds, run, events, t, Mmax, Vmax, error)
     return Result(ds)
+
+
+class _Arrays:
+    """Named arrays read as a Dataset's variables are (``obj.name.values``)."""
+
+    def __init__(self, **arrays):
+        for name, values in arrays.items():
+            setattr(self, name, _Values(values))
+
+
+class _Values:
+    __slots__ = ("values",)
+
+    def __init__(self, values):
+        self.values = values
 
 
 def section_modulus(scenario, x) -> np.ndarray:

@@ -19,7 +19,6 @@ where a stiff contact spring changes from strip to strip (a held stretch beside 
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,20 +49,34 @@ def strip_cells(plant) -> np.ndarray:
 
 
 def strength_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`plant_grid` of ``plant``, kept for the last plant asked (a run's strength and
-    seabed profile, and the next cases of a sweep that reuse the plant, ask again)."""
-    global _LAST_GRID
-    ref, grid = _LAST_GRID
-    if ref is None or ref() is not plant:
+    """:func:`plant_grid` of ``plant``, kept per process for the last few grids asked, by
+    the values it is built from (:func:`grid_key`): a run's strength and seabed profile, and
+    the next cases of a sweep, ask again with the same hull and bags even when the case's
+    plant is a new one (a varied valve or breakout time rebuilds the plant, not its grid)."""
+    key = grid_key(plant)
+    grid = _GRIDS.get(key)
+    if grid is None:
         grid = plant_grid(plant)
         for a in grid:
             a.flags.writeable = False  # shared by the runs of the plant
-        _LAST_GRID = (weakref.ref(plant), grid)
+        _GRIDS[key] = grid
+        while len(_GRIDS) > GRIDS_KEPT:
+            _GRIDS.pop(next(iter(_GRIDS)))
     return grid
 
 
-#: (a weak reference to the plant, its strength grid) of the last :func:`strength_grid`
-_LAST_GRID: tuple = (None, None)
+def grid_key(plant) -> tuple:
+    """Everything :func:`plant_grid` reads of ``plant``, exactly (floats by their bits)."""
+    hull = plant.hull
+    spans = tuple(None if s is None else tuple(float(e).hex() for e in s) for s in plant.spans)
+    weight = np.ascontiguousarray(plant.strips.weight, dtype=float)
+    return (float(hull.length).hex(), int(hull.n_elements), int(plant.modal.nr), spans,
+            weight.shape, weight.tobytes())
+
+
+#: strength grids kept per process (their keys: :func:`grid_key`), oldest first
+GRIDS_KEPT = 4
+_GRIDS: dict = {}
 
 
 def plant_grid(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -179,8 +192,8 @@ def strength(plant, snaps: dict):
     chunk = max(1, CHUNK_VALUES // x.size)
     for a in range(0, nt, chunk):
         part = {k: v[a:a + chunk] for k, v in snaps.items()}
-        Vc, Mc = shear_moment(x, line_loads(plant, xe, part, grid), point_loads(plant, part))
-        V[a:a + chunk], M[a:a + chunk] = Vc[:, keep], Mc[:, keep]
+        V[a:a + chunk], M[a:a + chunk] = shear_moment(
+            x, line_loads(plant, xe, part, grid), point_loads(plant, part), keep)
     return x[keep], V, M
 
 

@@ -15,6 +15,7 @@ trapezoid of :mod:`flexlift.control.reference` is used unchanged.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,24 @@ def speed_limit(z, V, capacity, purge_max, eta, water_depth, p_atm, rho_g):
     return q / expansion_rate(V, p, rho_g, 1.0)
 
 
+def _passes(v: list, step: float) -> list:
+    """The forward (accelerating from rest) and backward (decelerating to rest) passes over
+    the speed caps ``v`` [m/s] (a list, changed in place), ``step`` = 2 a dz [m^2/s^2]: on
+    Python floats (the same operations as on numpy's scalars: libm's pow for the square, the
+    correctly rounded sqrt; a few times faster)."""
+    n = len(v)
+    v[0] = 0.0
+    prev = 0.0
+    for i in range(1, n):  # accelerating from rest
+        s = math.sqrt(prev ** 2 + step)
+        prev = v[i] = v[i] if not s < v[i] else s
+    v[-1] = prev = 0.0
+    for i in range(n - 2, -1, -1):  # decelerating to rest at the target
+        s = math.sqrt(prev ** 2 + step)
+        prev = v[i] = v[i] if not s < v[i] else s
+    return v
+
+
 def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth, p_atm,
                   rho_g) -> Profile | None:
     """The fastest ascent to ``target`` [m] within ``speed`` [m/s], ``accel`` [m/s^2] and
@@ -59,13 +78,7 @@ def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth
         return None
     cap = np.minimum(lim, speed)
     dz = z[1] - z[0]
-    v = cap.copy()
-    v[0] = 0.0
-    for i in range(1, z.size):  # accelerating from rest
-        v[i] = min(v[i], np.sqrt(v[i - 1] ** 2 + 2.0 * accel * dz))
-    v[-1] = 0.0
-    for i in range(z.size - 2, -1, -1):  # decelerating to rest at the target
-        v[i] = min(v[i], np.sqrt(v[i + 1] ** 2 + 2.0 * accel * dz))
+    v = np.array(_passes(cap.tolist(), float(2.0 * accel * dz)))
     tau = np.concatenate([[0.0], np.cumsum(2.0 * dz / np.maximum(v[1:] + v[:-1], 1e-12))])
     t = np.linspace(0.0, tau[-1], TIMES)
     binding = z[lim < speed]

@@ -1,0 +1,144 @@
+"""A sweep case's Python work outside the loop made cheaper without changing a number
+(issue 28, "a cheaper case"): each shortcut against the code it replaced, bit for bit."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexlift.control.profile import _passes, valve_profile
+from flexlift.loads.strength import shear_moment
+
+TRAWLER = Path(__file__).parent / "data" / "trawler.yaml"
+BAGS = Path(__file__).resolve().parents[1] / "benchmarks" / "bags_tanker.yaml"
+
+
+def _passes_before(cap: np.ndarray, accel: float, dz: float) -> np.ndarray:
+    """The forward-backward passes as they were written on numpy's scalars."""
+    v = cap.copy()
+    v[0] = 0.0
+    for i in range(1, v.size):
+        v[i] = min(v[i], np.sqrt(v[i - 1] ** 2 + 2.0 * accel * dz))
+    v[-1] = 0.0
+    for i in range(v.size - 2, -1, -1):
+        v[i] = min(v[i], np.sqrt(v[i + 1] ** 2 + 2.0 * accel * dz))
+    return v
+
+
+def test_passes_on_python_floats_are_the_numpy_scalars_bit_for_bit():
+    rng = np.random.default_rng(7)
+    for k in range(30):
+        n = int(rng.integers(2, 3000))
+        cap = rng.uniform(0.0, 1.5, n) * (rng.uniform(size=n) > 0.05)  # some zero caps
+        accel, dz = float(rng.uniform(1e-4, 0.05)), float(rng.uniform(1e-3, 1.0))
+        want = _passes_before(cap, accel, dz)
+        got = np.array(_passes(cap.tolist(), float(2.0 * accel * dz)))
+        assert np.array_equal(got.view(np.uint64), want.view(np.uint64)), k
+
+
+def test_valve_profile_binds_and_is_finite():
+    """A purge limit that binds gives a profile slower than the plain speed (the passes ran)."""
+    p = valve_profile(300.0, 0.5, 0.01, np.array([400.0]), np.array([500.0]), 0.5, 0.8,
+                      350.0, 101325.0, 1025.0 * 9.81)
+    assert p is not None and p.limit_from is not None
+    assert np.all(np.isfinite(p.v)) and 0.0 < p.v.max() < 0.5 and p.v[0] == 0.0
+
+
+def test_shear_moment_at_kept_points_is_the_full_result_there():
+    rng = np.random.default_rng(3)
+    x = np.sort(np.concatenate([np.linspace(0.0, 200.0, 301), [50.0, 50.0, 120.0]]))
+    q = rng.normal(size=(17, x.size)) * 1e4
+    pts = [(50.0, rng.normal(size=17) * 1e6), (0.0, 3e5), (133.3, rng.normal(size=17) * 1e6),
+           (200.0, -1e5)]
+    keep = np.sort(rng.choice(x.size, 60, replace=False))
+    V, M = shear_moment(x, q, pts)
+    Vk, Mk = shear_moment(x, q, pts, keep)
+    assert Vk.shape == (17, 60)
+    assert np.array_equal(Vk, V[:, keep]) and np.array_equal(Mk, M[:, keep])
+
+
+CASE_B = {"gas.fill_rate_max_m3_s": 0.55, "gas.purge_rate_max_m3_s": 1.7,
+          "seabed.breakout_time_s": 300.0}
+CASE_A = {"gas.fill_rate_max_m3_s": 0.45, "gas.purge_rate_max_m3_s": 2.3,
+          "seabed.breakout_time_s": 300.0}
+
+_FRESH = """
+import json, sys
+from flexlift.scenario import load_scenario
+from flexlift.sweep.worker import Task, run_case
+changes = json.loads(sys.argv[1])
+record, _ = run_case(Task(1, load_scenario("tanker"), changes, ("coordinated",), False))
+print(json.dumps(record))
+"""
+
+
+def _plain(record: dict) -> dict:
+    return {k: v for k, v in record.items() if k not in ("elapsed_s", "pid", "host")}
+
+
+def test_a_case_after_another_is_the_case_in_a_fresh_process():
+    """The worker's caches (plan, plant, strength grid) warm from another case give the
+    record a cold process gives, number for number."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from flexlift.scenario import load_scenario
+    from flexlift.sweep.worker import Task, run_case
+
+    base = load_scenario("tanker")
+    run_case(Task(0, base, CASE_A, ("coordinated",), False))
+    warm, _ = run_case(Task(1, base, CASE_B, ("coordinated",), False))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    out = subprocess.run([sys.executable, "-c", _FRESH, json.dumps(CASE_B)], env=env,
+                         capture_output=True, text=True, timeout=600, check=True)
+    cold = json.loads(out.stdout.strip().splitlines()[-1])
+    assert warm["status"] == "completed"
+    assert _plain(json.loads(json.dumps(warm))) == _plain(cold)
+
+
+def test_the_strength_grid_is_shared_by_plants_of_the_same_hull_and_bags():
+    from flexlift.ascent import strength as S
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.scenario import load_scenario
+
+    base = load_scenario("tanker")
+    a = coupled_plant(base.with_changes(**CASE_A))
+    b = coupled_plant(base.with_changes(**CASE_B))
+    assert a is not b and S.grid_key(a) == S.grid_key(b)
+    assert S.strength_grid(a) is S.strength_grid(b)
+    for got, want in zip(S.strength_grid(b), S.plant_grid(b)):
+        assert np.array_equal(got, want)
+    # other hulls and meshes after the tanker's grid is kept: each its own grid
+    others = [base.with_changes(**{"hull.elements": base.hull.elements + 4}),
+              base.with_changes(**{"simulation.retained_flexible_modes":
+                                   base.simulation.retained_flexible_modes + 2}),
+              load_scenario(str(TRAWLER))]
+    for sc in others:
+        p = coupled_plant(sc)
+        assert S.grid_key(p) != S.grid_key(a)
+        for got, want in zip(S.strength_grid(p), S.plant_grid(p)):
+            assert np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("mode", ["decentralized", "coordinated"])
+def test_all_cluster_keys_at_once_are_each_bags_key(mode):
+    """The 73-bag plan (8 alike at each lift point), the pipeline's internal bags and the
+    tanker: the keys built at once are each bag's :func:`cluster_key`, byte for byte."""
+    from flexlift.ascent.clusters import cluster_key, cluster_keys
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.control.build import controller_for, fuzzy_maps
+    from flexlift.scenario import load_scenario
+
+    fifty = load_scenario(str(BAGS)).with_changes(**{"lift.catalogue_bag.lift_t": 50.0})
+    for sc in (fifty, load_scenario("pipeline"), load_scenario("tanker")):
+        P = coupled_plant(sc)
+        table, _, fill = fuzzy_maps(sc)
+        C = controller_for(sc, P, mode, table, fill)[0]
+        keys = cluster_keys(P, C)
+        assert keys == [cluster_key(P, C, i) for i in range(len(P.names))]
+        if sc is fifty:
+            assert len(set(keys)) < len(keys)  # the 73 bags do share
