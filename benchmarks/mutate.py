@@ -164,8 +164,8 @@ MUTATIONS = (
     # ------------------------------------------------------------------ gas and hold in the loop
     M("purge-orifice-loop", "ascent/kernel.py",
       "purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],\n"
-      "                           plant.bags.purge_max)",
-      "purge = state.opening[i] * plant.bags.purge_max",
+      "                           plant.bags.purge_max[i])",
+      "purge = state.opening[i] * plant.bags.purge_max[i]",
       "the loop's start-of-step purge flow without the orifice law"),
     M("boyle-loop", "ascent/kernel.py",
       "p1 = ambient_pressure(state.z[i], bags.water_depth, bags.p_atm, bags.rho_g)",
