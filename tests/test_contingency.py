@@ -78,7 +78,7 @@ def test_the_cases_are_the_same_faults_run_one_by_one_from_their_rerun_files(tmp
         if a["validity_end_s"] is not None:  # the slope passed its validity: unsafe, and the
             beyond += 1  # peaks after it are not numbers
             assert a["outcome"] == "unsafe" and "beyond the model's validity" in a["reason"]
-            assert a["up_ms_beyond"] == (a["up_ms"] is None)
+            assert a["up_ms_beyond"] and a["up_ms"] is not None  # its peak up to then
             continue
         assert a["outcome"] == r.outcome["kind"]
         assert a["up_ms"] == r.headline["max_ascent_velocity_ms"]
@@ -275,3 +275,25 @@ def test_noise_runs_every_bag_and_the_parts_decide_the_kinds():
     cases, _ = make_cases(tanker, phases[:1])
     assert len(cases) == 4 * len(KINDS) + 3  # 4 external bags, 3 internal ones only lost
     assert kinds_of(False) == ("bag_rupture",)
+
+
+def test_a_case_stopped_beyond_validity_has_the_answer_of_the_whole_run():
+    """The tanker losing bag_2's sling at the near_target phase passes the slope's validity:
+    the run stopped there (``stop_beyond``, as every case runs) is shorter and its answer is
+    that of the run to its end, field by field."""
+    from flexlift.sweep.contingency.answer import case_answer
+
+    sc = load_scenario("tanker").with_changes(
+        faults=[{"kind": "sling_break", "bag": "bag_2", "time_s": 3278.0}])
+    answers, ends = [], []
+    for stop in (False, True):
+        r = simulate(sc, stop_beyond=stop)
+        res = {"events": r.events, "outcome": r.outcome["kind"], "cause": r.outcome["cause"],
+               "headline": r.headline}
+        answers.append(case_answer(res, r.dataset, sc, sc.control.mode))
+        ends.append(float(r.dataset.time.values[-1]))
+    whole, stopped = answers
+    assert whole["validity_end_s"] is not None and whole["outcome"] == "unsafe"
+    assert ends[1] < ends[0] - 1000.0  # the stopped run is much shorter
+    assert stopped == whole
+    assert whole["up_ms_beyond"] and whole["up_ms"] is not None

@@ -31,7 +31,7 @@ from flexlift.ascent.noise import ForceNoise, MeasurementNoise
 from flexlift.ascent.paper import paper_plant
 from flexlift.ascent.plant import Plant, check_neutral, coupled_plant
 from flexlift.ascent.records import LoopInputs
-from flexlift.ascent.result import Result, build_result
+from flexlift.ascent.result import HULL_VARS, Result, build_result
 from flexlift.ascent.state import (
     EV_NUMERICS,
     RET_NEED_U,
@@ -46,6 +46,8 @@ from flexlift.control.controller import new_state
 from flexlift.errors import InputError, SimulationError
 
 MODES = ("decentralized", "coordinated", "paper", "open-loop")
+#: the recorded hull row's pitch column
+HULL_PITCH = list(HULL_VARS).index("pitch")
 #: steps per call of the compiled loop (progress, faults and noise between calls)
 CHUNK_STEPS = 2000
 #: simulation.duration_s: auto: the record first holds this much of the run [s]
@@ -58,7 +60,8 @@ HELD_MARGIN = 0.05
 
 def simulate(scenario, control: str | None = None, duration: float | None = None,
              engine="table", progress=None, plant: Plant | None = None,
-             share: bool = True, step_control: bool = True) -> Result:
+             share: bool = True, step_control: bool = True,
+             stop_beyond: bool = False) -> Result:
     """Simulate the ascent of ``scenario``.
 
     Parameters
@@ -88,6 +91,12 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
         While every holding group is held, advance the mechanics in steps of up to
         ``HELD_STEP_S`` (:func:`held_steps`; the gas, control, holding force and separation
         stay on every time step); False: every step alike (default True).
+    stop_beyond : bool, optional
+        End the run at the first chunk of the loop whose recorded pitch or strength
+        snapshots' slope passes ``limits.slope_validity_deg`` (:meth:`Ascent.beyond`): what
+        follows is outside the small-deflection model's validity. For the single-failure
+        study (:mod:`flexlift.sweep.contingency.answer`), whose answer reads nothing after
+        that moment; the rows up to it are those of a full run (default False: run on).
 
     Returns
     -------
@@ -119,7 +128,9 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     refuse_unworkable(scenario, plant)
     if duration is None:
         warn_short(scenario, plant)
-    return Ascent(scenario, plant, mode, T_end, engine, share, step_control).run(progress)
+    run = Ascent(scenario, plant, mode, T_end, engine, share, step_control)
+    run.stop_beyond = stop_beyond
+    return run.run(progress)
 
 
 def held_steps(settings: Settings) -> int:
@@ -185,6 +196,8 @@ class Ascent:
         self.meas_noise = MeasurementNoise(scenario, bags.nb)
         self.faults = sorted(scenario.faults, key=lambda f: f.time_s)
         self.fault_events: list[tuple[float, str, str, str]] = []
+        self.stop_beyond = False  # simulate(stop_beyond=...)
+        self._seen = [0, 0]  # rows and snapshots already checked by beyond()
         self._initial_state()
 
     def _expected_steps(self) -> int:
@@ -228,7 +241,7 @@ class Ascent:
             code = self._advance(k_stop)
             if progress is not None:  # 100 % only at the end, whenever that comes
                 progress(min(state.counters[0] / max(whole, 1), 0.99))
-            if code == RET_STOP:
+            if code == RET_STOP or (self.stop_beyond and self.beyond()):
                 break
         if recorder.ev_code[:recorder.counts[2]].tolist().count(EV_NUMERICS):
             error = f"numerics failed at t = {state.counters[0] * settings.dt:.1f} s: the " \
@@ -242,6 +255,28 @@ class Ascent:
         if error:
             raise SimulationError(error + " (results kept up to that moment)", partial=result)
         return result
+
+    def beyond(self) -> bool:
+        """Whether a row recorded or a strength snapshot taken since the last call has the
+        hull's pitch or the structure's largest slope past ``limits.slope_validity_deg``
+        (what :func:`flexlift.sweep.contingency.answer.validity_time` reads of the result)."""
+        from flexlift.ascent.plant import slope_at
+        from flexlift.ascent.strength import strength_grid
+
+        rec, lim = self.recorder, math.radians(self.scenario.limits.slope_validity_deg)
+        rows, snaps = int(rec.counts[0]), int(rec.counts[1])
+        r0, s0 = self._seen
+        self._seen = [rows, snaps]
+        pitch = rec.hull[r0:rows, HULL_PITCH]
+        if pitch.size and np.abs(pitch).max() > lim:
+            return True
+        if snaps <= s0 or self.plant.kind != "coupled":
+            return False
+        if not hasattr(self, "_slope_rows"):  # the slope of the retained modes on the grid
+            x, _, keep = strength_grid(self.plant)
+            self._slope_rows = slope_at(self.plant.modes, x[keep])[:, : self.plant.modal.nr].T
+        slope = np.abs(np.arctan(rec.snap_q[s0:snaps] @ self._slope_rows))
+        return bool(slope.max() > lim)
 
     def _t_last(self) -> float:
         return (int(self.state.counters[0]) - 1) * self.settings.dt

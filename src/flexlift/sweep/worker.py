@@ -71,6 +71,7 @@ class Task:
     changes: dict
     controls: tuple
     histories: bool
+    stop_beyond: bool = False  # end each run once beyond the model's validity (simulate's)
 
 
 class _Collect(logging.Handler):
@@ -136,7 +137,7 @@ def run_case(task: Task) -> tuple[dict, dict]:
             raise CaseError(task.index, None, traceback.format_exc()) from None
         for mode in task.controls:
             try:
-                res, ds = _one_mode(scenario, mode)
+                res, ds = _one_mode(scenario, mode, task.stop_beyond)
             except Exception:
                 raise CaseError(task.index, mode, traceback.format_exc()) from None
             record["results"][mode] = res
@@ -173,12 +174,13 @@ def _size(scenario) -> str:
             f"{sim.time_step_s:g} s, {sim.retained_flexible_modes} retained flexible modes")
 
 
-def _one_mode(scenario, mode: str) -> tuple[dict, object]:
+def _one_mode(scenario, mode: str, stop_beyond: bool = False) -> tuple[dict, object]:
     from flexlift.ascent import simulate
     from flexlift.sweep.plants import plant_for
 
     try:
-        result = simulate(scenario, control=mode, plant=plant_for(scenario, mode))
+        result = simulate(scenario, control=mode, plant=plant_for(scenario, mode),
+                          stop_beyond=stop_beyond)
     except SimulationError as exc:
         partial = exc.partial
         return _failed(clean(str(exc), 300), partial), getattr(partial, "dataset", None)

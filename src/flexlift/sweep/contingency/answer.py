@@ -3,10 +3,14 @@ limits, the breach and the resettling, and the reason in one line.
 
 While the run stays within the model's validity the peaks are the run's own headline numbers
 (``flexlift simulate`` gives the same); the sling force is the recorded rows' largest over the
-bag's design load (its full true lift). Once the hull's pitch or the structure's slope passes ``limits.slope_validity_deg`` the
-small-deflection model is outside its validity: the case is unsafe from then on, and a peak
-reached later is reported as beyond the model's validity (``None`` with ``*_beyond`` true),
-not as a number; the peaks before that moment are kept.
+bag's design load (its full true lift). Once the hull's pitch or the structure's slope passes
+``limits.slope_validity_deg`` (at ``validity_end_s``) the small-deflection model is outside
+its validity: the case is unsafe, and the answer reads nothing of the run after that moment.
+Each peak is its largest value up to then, with ``*_beyond`` true (what follows is beyond the
+model's validity, not a number); the breach and the resettling are kept if they came before
+(else ``None`` with ``*_beyond`` true); the reason names the fault and the limits broken before
+it; ``end_s`` is that moment. So the run may stop there (``simulate(stop_beyond=True)``, as
+:func:`run_fault_case` runs every case) and the answer is the same.
 
 :func:`run_fault_case` is what a sweep engine runs for a case (any executor: a picklable
 function of one :class:`~flexlift.sweep.worker.Task`).
@@ -28,6 +32,10 @@ PEAKS = ("up_ms", "down_ms", "pitch_deg", "sling_ratio", "utilisation")
 #: the answer's peaks that are the run's headline numbers when the whole run is valid
 HEADLINE = {"up_ms": "max_ascent_velocity_ms", "down_ms": "max_descent_velocity_ms",
             "pitch_deg": "max_pitch_deg", "utilisation": "max_utilisation"}
+#: the events a reason beyond the model's validity names (besides the fault's own)
+LIMIT_EVENTS = {"limit_ascent_velocity": "upward speed over its limit",
+                "limit_descent_velocity": "downward speed over its limit",
+                "limit_pitch": "pitch over its limit", "surface_breach": "surface breach"}
 #: the longest reason kept [characters]
 REASON_CHARS = 200
 
@@ -35,7 +43,7 @@ REASON_CHARS = 200
 def run_fault_case(task: Task) -> tuple[dict, dict]:
     """Run one case (:func:`~flexlift.sweep.worker.run_case`) and add to its control mode's
     result its ``answer`` (:func:`case_answer`); no histories are returned."""
-    record, datasets = run_case(dataclasses.replace(task, histories=True))
+    record, datasets = run_case(dataclasses.replace(task, histories=True, stop_beyond=True))
     for mode, res in record["results"].items():
         ds = datasets.get(mode)
         if ds is None:
@@ -124,36 +132,54 @@ def case_answer(result: dict, ds, scenario, mode: str) -> dict:
     sep = first("separation")
     end = float(ds.time.values[-1])
     t_v = validity_time(ds, scenario.limits.slope_validity_deg)
-    valid = _peaks(ds, scenario, capacity, faults, end if t_v is None else t_v, sep)
-    if t_v is None:  # the whole run is valid: the run's own maxima, taken at every step
-        h = result.get("headline", {})
-        for k, name in HEADLINE.items():
-            if h.get(name) is not None:
-                valid[k] = h[name]
-    out = dict(valid)
-    if t_v is not None:
-        whole = _peaks(ds, scenario, capacity, faults, end, sep)
-        for k in PEAKS:
-            later = whole[k] is not None and valid[k] is not None and whole[k] > valid[k]
-            out[f"{k}_beyond"] = bool(later)
-            if later:
-                out[k] = None
-    breach, resettle = first("surface_breach"), first("resettle")
+    if t_v is not None:  # nothing of the run after t_v is read (the run may stop there)
+        return _beyond_answer(events, ds, scenario, capacity, faults, t_v, sep)
+    out = _peaks(ds, scenario, capacity, faults, end, sep)
+    h = result.get("headline", {})  # the whole run is valid: its own maxima, at every step
+    for k, name in HEADLINE.items():
+        if h.get(name) is not None:
+            out[k] = h[name]
     outcome = result.get("outcome") or "failed"
-    cause = result.get("cause") or result.get("error") or ""
-    reason = one_line(cause)
-    if t_v is not None:
-        outcome = "unsafe"
-        reason = (f"{one_line(cause, REASON_CHARS - 70)}; the slope passed "
-                  f"{scenario.limits.slope_validity_deg:g} deg at {t_v:.0f} s: beyond the "
-                  "model's validity from then on")
+    reason = one_line(result.get("cause") or result.get("error") or "")
     if outcome == "failed":
         outcome = "unsafe"
-    out.update(outcome=outcome, reason=reason, validity_end_s=t_v,
-               breach_s=None if breach is None or (t_v is not None and breach > t_v) else breach,
-               breach_beyond=bool(breach is not None and t_v is not None and breach > t_v),
-               resettle_s=resettle, sling_design_t=round(float(
-                   capacity[list(ds.bag.values).index(valid["sling_bag"])]
-                   * scenario.environment.seawater_density_kg_m3 / C.TONNE), 1),
-               end_s=end)
+    breach = first("surface_breach")
+    out.update(outcome=outcome, reason=reason, validity_end_s=None, breach_s=breach,
+               breach_beyond=False, resettle_s=first("resettle"), resettle_beyond=False,
+               sling_design_t=_design_t(ds, scenario, capacity, out), end_s=end)
+    return out
+
+
+def _design_t(ds, scenario, capacity, peaks) -> float:
+    """The design load [t] of the bag whose sling came nearest its own."""
+    i = list(ds.bag.values).index(peaks["sling_bag"])
+    return round(float(capacity[i] * scenario.environment.seawater_density_kg_m3 / C.TONNE), 1)
+
+
+def _beyond_answer(events, ds, scenario, capacity, faults, t_v: float, sep) -> dict:
+    """The answer of a run whose pitch or slope passed its validity at ``t_v`` [s], from the
+    run up to ``t_v`` only."""
+    out = _peaks(ds, scenario, capacity, faults, t_v, sep)
+    for k in PEAKS:
+        out[f"{k}_beyond"] = True
+
+    def before(kind):
+        return next((e["time_s"] for e in events if e["kind"] == kind and e["time_s"] <= t_v),
+                    None)
+
+    kinds = {f["kind"] for f in faults}
+    said = [f"{LIMIT_EVENTS.get(e['kind'], e['kind'].replace('_', ' '))}"
+            + (f" of {e['bag']}" if e.get("bag") else "")
+            + (f" ({e['detail']})" if e.get("detail") and e["kind"] in LIMIT_EVENTS else "")
+            + f" at {e['time_s']:.0f} s"
+            for e in events if e["time_s"] <= t_v and (e["kind"] in LIMIT_EVENTS
+                                                      or e["kind"] in kinds)]
+    lead = one_line("; ".join(said), REASON_CHARS - 70) if said else "unsafe"
+    breach, resettle = before("surface_breach"), before("resettle")
+    out.update(outcome="unsafe",
+               reason=(f"{lead}; the slope passed {scenario.limits.slope_validity_deg:g} deg at "
+                       f"{t_v:.0f} s: beyond the model's validity from then on"),
+               validity_end_s=t_v, breach_s=breach, breach_beyond=breach is None,
+               resettle_s=resettle, resettle_beyond=resettle is None,
+               sling_design_t=_design_t(ds, scenario, capacity, out), end_s=t_v)
     return out

@@ -30,8 +30,8 @@ def _e(x) -> str:
 
 
 def _num(v, fmt="{:.3g}", beyond=False) -> str:
-    if beyond:
-        return "beyond validity"
+    if beyond:  # a number up to the model's validity, then beyond it
+        return "beyond validity" if v is None else f"{fmt.format(v)}, then beyond validity"
     return "–" if v is None else fmt.format(v)
 
 
@@ -103,7 +103,7 @@ def _cases(summary: dict) -> str:
                      _num(a.get("sling_ratio"), beyond=b["sling_ratio"]),
                      _num(a.get("utilisation"), beyond=b["utilisation"]),
                      _num(a.get("breach_s"), "{:.0f} s", a.get("breach_beyond", False)),
-                     _num(a.get("resettle_s"), "{:.0f} s"), _e(a.get("reason", "")),
+                     _num(a.get("resettle_s"), "{:.0f} s", a.get("resettle_beyond", False)), _e(a.get("reason", "")),
                      f"<code>{_e(r.get('rerun', ''))}</code>"])
     return _table(["case", "bag", "kind", "phase", "outcome", "up [m/s]", "down [m/s]",
                    "pitch [deg]", "sling / design", "bending util.", "breach", "resettle",
