@@ -24,7 +24,7 @@ from flexlift.errors import InputError
 from flexlift.sweep import aggregate as agg
 from flexlift.sweep.cases import Case, case_name
 from flexlift.sweep.contingency import margin as mg
-from flexlift.sweep.contingency.answer import run_fault_case
+from flexlift.sweep.contingency.answer import HEADLINE, run_fault_case
 from flexlift.sweep.contingency.cases import KINDS, check_kinds, make_cases, noisy
 from flexlift.sweep.contingency.phases import PHASES, find_phases
 from flexlift.sweep.spec import SweepSpec
@@ -246,8 +246,11 @@ def _summary(scenario, mode, base, found, cases, names, groups, reps, answers, m
 
     def sev(r):
         a = answers[r["index"]]
+        h = a.get("headline", {})
+        if a.get("validity_end_s") is not None:  # beyond validity: its peaks up to then
+            h = {**h, **{name: a.get(k) for k, name in HEADLINE.items()}}
         res = {"status": a.get("status") or "completed", "outcome": a["outcome"],
-               "criteria": a.get("criteria", {}), "headline": a.get("headline", {})}
+               "criteria": a.get("criteria", {}), "headline": h}
         return agg.severity(res, criteria, limits)
 
     fails.sort(key=sev, reverse=True)
@@ -303,7 +306,8 @@ WORST = 3
 
 def _histories(summary: dict, base) -> dict:
     """The worst :data:`WORST` cases' time histories (the failures first, by severity; then
-    the cases with the largest upward speed), run again here: ``{case index: dataset}``."""
+    the cases with the largest upward speed), run again here as the workers ran them (each
+    stopped once beyond the model's validity): ``{case index: dataset}``."""
     from flexlift.ascent import simulate
     from flexlift.errors import SimulationError
 
@@ -316,7 +320,7 @@ def _histories(summary: dict, base) -> dict:
         r = rows[i]
         try:
             out[i] = simulate(base.with_changes(faults=[r["fault"]]),
-                              control=summary["control"]).dataset
+                              control=summary["control"], stop_beyond=True).dataset
         except SimulationError as exc:
             if exc.partial is not None:
                 out[i] = exc.partial.dataset
