@@ -60,3 +60,21 @@ def test_the_fork_server_tells_xarray_no_dask_array_exists():
             "print(int(no_dask_arrays()))\n")
     # flexlift.sweep.warm warms the loop on import (its job in the fork server): a few seconds
     assert _run(code) == ["1", "0", "True", "0"]
+
+
+def test_a_summary_case_is_written_without_loading_the_ascent():
+    """The coordinator of a ``keep: summary`` sweep never imports the ascent package (its
+    compiled code's module, a second or more at the first case)."""
+    code = ("import sys, tempfile, json\n"
+            "from flexlift.sweep import parse_spec\n"
+            "from flexlift.sweep.store import SweepFolder\n"
+            "spec = parse_spec({'base': 'tanker', 'control': 'coordinated',\n"
+            "                   'grid': {'seabed.breakout_time_s': [200, 400]}})\n"
+            "with tempfile.TemporaryDirectory() as d:\n"
+            "    with SweepFolder.open(d + '/out', spec) as folder:\n"
+            "        rec = folder.write_case('case_0000', {'case': 0, 'status': 'completed',\n"
+            "                                              'results': {}}, {})\n"
+            "        on_disk = json.loads(folder.case_path('case_0000').read_text())\n"
+            "print(int('flexlift.ascent' in sys.modules), int('numba' in sys.modules),\n"
+            "      on_disk == rec, rec['histories'])\n")
+    assert _run(code) == ["0", "0", "True", "[]"]
