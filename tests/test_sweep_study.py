@@ -283,7 +283,7 @@ def test_a_sweep_starts_its_workers_before_reading_the_spec():
     import sys
 
     code = ("import sys, flexlift.cli as c\n"
-            "c.build_parser = lambda: sys.exit('mods' + str(int('flexlift.ascent' in "
+            "c.build_parser = lambda *a: sys.exit('mods' + str(int('flexlift.ascent' in "
             "sys.modules)))\n"
             "from multiprocessing import forkserver\n"
             "try:\n    c.main(sys.argv[1:])\n"

@@ -41,7 +41,10 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The command line's parser: every sub-command, or only ``command`` when it is one of
+    :data:`COMMANDS` (each sub-command's module imports its own stage: ``flexlift sweep``
+    need not import the modal analysis' or the ascent's compiled code to read its line)."""
     parser = _Parser(
         prog="flexlift",
         description="Raise a sunken flexible hull with controlled lift bags.",
@@ -49,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"flexlift {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name in COMMANDS:
+    for name in (command,) if command in COMMANDS else COMMANDS:
         try:
             module = importlib.import_module(f"flexlift.cli.{name}")
         except ModuleNotFoundError as exc:  # a stage not built yet in this checkout
@@ -62,11 +65,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     words = sys.argv[1:] if argv is None else list(argv)
-    if next((w for w in words if not w.startswith("-")), None) == "sweep":
+    command = next((w for w in words if not w.startswith("-")), None)  # no global option takes a value
+    if command == "sweep":
         from flexlift.sweep.executors import start_early  # the workers warm up meanwhile
 
         start_early(words)
-    parser = build_parser()
+    parser = build_parser(command)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a one-line usage error (code 2)

@@ -165,7 +165,9 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
 
 
 #: what the results need and the coordinator imports while the workers run the cases
-TAIL_MODULES = ("flexlift.sweep.report", "scipy.io")
+TAIL_MODULES = ("flexlift.sweep.report", "scipy.io", "dask.array", "dask.distributed")
+# (with Dask installed, xarray imports dask.array at the first Dataset, and its netCDF writer
+# distributed, only to ask whether a Dask array or client is about: over half a second at the end)
 
 
 def _import_meanwhile() -> None:

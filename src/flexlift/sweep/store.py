@@ -109,10 +109,11 @@ class SweepFolder:
     def write_case(self, name: str, record: dict, datasets: dict) -> dict:
         """The case's files, atomically: its histories first, its record last (the record's
         presence is what makes a case finished). Returns the record as written."""
-        from flexlift.ascent import Result
-        from flexlift.output.results import save_netcdf
-
         files = []
+        if datasets:  # (not imported for a summary only: the ascent package loads the compiled
+            # code's module, a second or more in the coordinator, at its first case)
+            from flexlift.ascent import Result
+            from flexlift.output.results import save_netcdf
         for mode, ds in datasets.items():
             ds = ds.copy()
             ds.attrs[OWNER_ATTR] = self.checksum
