@@ -73,8 +73,9 @@ def plan_study(scenario, mode: str | None = None, phases=PHASES, times=(), kinds
     if n > MAX_CASES or (total > MAX_SECONDS and not yes):
         what = f"{n:,} cases" + (" (--all: every bag)" if all_bags else "")
         raise InputError.from_line(
-            f"contingency: {what}, about {total / 60:,.0f} min on {workers} worker(s); at most "
-            f"{MAX_CASES:,} cases and {MAX_SECONDS / 60:.0f} min without --yes: "
+            f"{what}, about {total / 60:,.0f} min on {workers} worker(s); at most "
+            f"{MAX_CASES:,} cases, and {MAX_SECONDS / 60:.0f} min without --yes: "
+            + ("give --yes to run it, or " if n <= MAX_CASES else "")
             + ("drop --all (one representative per lift point), or " if all_bags else "")
             + "choose fewer --kinds or --phases")
     return base, found, cases, groups, not every, plain_s
