@@ -17,6 +17,7 @@ import contextlib
 import json
 import os
 import secrets
+import stat
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -66,7 +67,9 @@ def atomic_file(path: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
         tmp = path.parent / f".{path.name}.{secrets.token_hex(4)}{suffix or '.tmp'}"
         claim(tmp, path)
         try:
-            os.close(os.open(tmp, flags, 0o600))
+            # held open until the end, so that no other file can take its inode number: the
+            # name is removed at the end only while it is still this file
+            fd = os.open(tmp, flags, 0o600)
             break
         except FileExistsError:
             continue
@@ -74,11 +77,18 @@ def atomic_file(path: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
         raise FileExistsError(f"no free temporary name beside {path}")
     try:
         yield tmp
+        if not stat.S_ISREG(os.lstat(tmp).st_mode):  # never chmod or rename through a link
+            raise FileExistsError(f"{tmp} was replaced by something not a file during the write")
         os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     finally:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()  # only left when the write failed: our own temporary file
+        try:
+            with contextlib.suppress(FileNotFoundError):
+                now, mine = os.lstat(tmp), os.fstat(fd)  # left only when the write failed
+                if (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino):
+                    tmp.unlink()
+        finally:
+            os.close(fd)
 
 
 def write_text(path: str | os.PathLike, text: str) -> Path:

@@ -102,11 +102,11 @@ class Journal:
         by this user; anything else there raises FileExistsError (the folder is refused)."""
         with contextlib.suppress(FileNotFoundError):
             st = os.lstat(self.path)
-            if not (stat.S_ISREG(st.st_mode) and st.st_nlink == 1
-                    and st.st_uid == os.geteuid()):
+            if not self._provably_ours(st):
                 raise FileExistsError(f"{self.path} is not a flexlift journal (a link, another "
-                                      "file, or another user's)")
-            os.unlink(self.path)
+                                      "file, another user's, or not a list of names)")
+            if _same_file(os.lstat(self.path), st):
+                os.unlink(self.path)
         fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW, 0o644)
         st = os.fstat(fd)
         os.close(fd)
@@ -119,7 +119,8 @@ class Journal:
         if not relpaths:
             return
         line = "".join(json.dumps(r) + "\n" for r in relpaths).encode("utf-8")
-        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | _NOFOLLOW)
+        # O_NONBLOCK: a FIFO planted under the name fails here instead of blocking the run
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_NONBLOCK | _NOFOLLOW)
         try:
             st = os.fstat(fd)
             if (st.st_dev, st.st_ino) != self.ident or not stat.S_ISREG(st.st_mode):
@@ -143,12 +144,36 @@ class Journal:
         return out
 
     def remove(self) -> None:
-        """Remove the journal when it is provably flexlift's (a regular file with one link:
-        never a link, nor a name of another file)."""
+        """Remove the journal when it is provably flexlift's (:meth:`_provably_ours`: never a
+        link, a name of another file, another user's file or one that is not a journal)."""
         with contextlib.suppress(FileNotFoundError):
             st = os.lstat(self.path)
-            if stat.S_ISREG(st.st_mode) and st.st_nlink == 1:
+            if self._provably_ours(st) and _same_file(os.lstat(self.path), st):
                 os.unlink(self.path)
+
+    def _provably_ours(self, st: os.stat_result) -> bool:
+        """The file under the journal's name (``st`` its lstat) is a journal flexlift wrote: a
+        regular file with one link, owned by this user, whose every whole line is a JSON
+        string naming a relative path (a torn last line is allowed: a killed run's)."""
+        if not (stat.S_ISREG(st.st_mode) and st.st_nlink == 1 and st.st_uid == os.geteuid()):
+            return False
+        data = read_regular(self.path, JOURNAL_MAX)
+        if data is None:
+            return False
+        lines = data.split(b"\n")
+        for line in lines[:-1]:  # the part after the last newline may be torn
+            try:
+                name = json.loads(line.decode("utf-8"))
+            except (UnicodeDecodeError, ValueError):
+                return False
+            if not (isinstance(name, str) and _relative(name)):
+                return False
+        return True
+
+
+def _same_file(a: os.stat_result, b: os.stat_result) -> bool:
+    """Two stats of one file (device and inode)."""
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
 
 
 def _relative(name: str) -> bool:
@@ -234,7 +259,8 @@ def remove_listed(root: Path, listed: Iterable[str]) -> list[str]:
     if not left:
         Journal(root).remove()
         with contextlib.suppress(OSError):
-            if stat.S_ISREG(os.lstat(root / MARKER).st_mode):
+            st = os.lstat(root / MARKER)
+            if stat.S_ISREG(st.st_mode) and st.st_nlink == 1 and st.st_uid == os.geteuid():
                 os.unlink(root / MARKER)
         with contextlib.suppress(OSError):
             os.rmdir(root)
