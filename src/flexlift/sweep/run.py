@@ -121,8 +121,6 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
     >>> result.completed, result.failed
     (2, 0)
     """
-    from flexlift.sweep.executors import make_engine
-
     t0 = time.perf_counter()
     cases = make_cases(spec)
     names = {c.index: case_name(spec, c.index) for c in cases}
@@ -132,21 +130,10 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
             skipped = len(records)
             if progress is not None:
                 progress(len(records), len(cases), _failures(records))
-            ran_now = 0
             if not isinstance(engine, Serial) and len(records) < len(cases):
                 _import_meanwhile()
-            for block in _blocks(spec, cases):
-                todo = [c for c in block if c.index not in records]
-                if engine is None and todo:
-                    engine = make_engine()
-                if todo:
-                    _execute(engine, spec, todo, names, folder, records, folder.inc.run_id,
-                             progress)
-                    ran_now += len(todo)
-                if spec.halfwidth is not None:
-                    upto = block[-1].index + 1
-                    if halfwidth_reached(_prefix(records, upto), spec.controls, spec.halfwidth):
-                        break
+            engine, ran_now, upto = _run_blocks(spec, cases, names, folder, records, engine,
+                                                progress)
             if spec.halfwidth is not None:
                 cases = cases[:upto]
                 records = _prefix(records, upto)
@@ -162,6 +149,34 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
     if engine is not None:
         engine.close()
     return result
+
+
+def _run_blocks(spec, cases, names, folder, records, engine, progress):
+    """Run the cases not yet in ``records`` block by block (one block unless the SPEC asks
+    for a half-width, which is checked at each block's end); the engine is made at the first
+    case to run. Returns (the engine or None, the cases run now, the cases up to the last
+    block run)."""
+    from flexlift.sweep.executors import make_engine
+
+    ran, upto, made = 0, len(cases), None
+    try:
+        for block in _blocks(spec, cases):
+            todo = [c for c in block if c.index not in records]
+            if engine is None and todo:
+                engine = made = make_engine()
+            if todo:
+                _execute(engine, spec, todo, names, folder, records, folder.inc.run_id,
+                         progress)
+                ran += len(todo)
+            if spec.halfwidth is not None:
+                upto = block[-1].index + 1
+                if halfwidth_reached(_prefix(records, upto), spec.controls, spec.halfwidth):
+                    break
+    except BaseException:
+        if made is not None:  # the caller closes an engine it gave
+            made.close(cancel=True)
+        raise
+    return engine, ran, upto
 
 
 #: what the results need and the coordinator imports while the workers run the cases
