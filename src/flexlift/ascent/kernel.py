@@ -48,7 +48,10 @@ positional argument:
 - *a new kind of record*: a field of ``LoopInputs``, its struct in ``_structs``, and a
   parameter of only the functions that read it (each struct a function takes costs a
   reference count per call, as does a struct read out of another and passed on: a new part
-  of the plant is a field of ``PlantRecords``, read as ``plant.part``, not an argument).
+  of the plant is a field of ``PlantRecords``, read as ``plant.part``, not an argument; the
+  arrays inside the structs are borrowed and cost nothing to pass);
+- *a small law called at every step* (a few dozen operations on the loop's arrays):
+  ``@inline_jit`` (:func:`flexlift._jit.inline_jit`), compiled into its callers.
 
 Renaming or removing a record's class leaves numba's on-disk cache index naming the old
 class: delete the ``*.nbi``/``*.nbc`` files of ``__pycache__`` after such a change.
@@ -613,6 +616,11 @@ def separations(t, plant, state, switches, settings, recorder, noise):
     """Held groups whose uplift now exceeds their hold separate, at a time interpolated
     inside the step; the mechanics of the step are then redone, held up to that time and free
     after it (sub-steps)."""
+    for g in range(plant.seabed.ng):  # mostly none: no array made at every step
+        if not state.sep[g] and group_uplift(plant, state.V, switches.attached, g) > state.H[g]:
+            break
+    else:
+        return
     new = np.zeros(plant.seabed.ng, np.bool_)
     th_min = 1.0
     for g in range(plant.seabed.ng):

@@ -1,36 +1,64 @@
 """Small dense products for the compiled loop, written as loops: on the few-by-few arrays of
-a step, a BLAS call costs more in overhead (and a temporary array) than the arithmetic."""
+a step, a BLAS call costs more in overhead (and a temporary array) than the arithmetic.
+
+Each row's sum runs over its columns in order, one product added at a time, so a product is
+the same to the last bit however the rows are grouped. Rows are taken four at a time (each
+with its own sum): a row's sum is a chain of dependent additions, and four independent chains
+keep the processor busy where one waits on each addition (the 5 x 44 product of the strips'
+generalised force: 175 ns a row at a time).
+"""
 
 from __future__ import annotations
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit
 
 
-@jit
+@inline_jit
+def _rows(M, x, out, add):
+    """out = M @ x, or out += M @ x when ``add``; rows four at a time, then one at a time."""
+    m, n = M.shape
+    i = 0
+    while i + 4 <= m:
+        s0, s1, s2, s3 = 0.0, 0.0, 0.0, 0.0
+        for j in range(n):
+            xj = x[j]
+            s0 += M[i, j] * xj
+            s1 += M[i + 1, j] * xj
+            s2 += M[i + 2, j] * xj
+            s3 += M[i + 3, j] * xj
+        if add:
+            out[i] += s0
+            out[i + 1] += s1
+            out[i + 2] += s2
+            out[i + 3] += s3
+        else:
+            out[i], out[i + 1], out[i + 2], out[i + 3] = s0, s1, s2, s3
+        i += 4
+    while i < m:
+        s = 0.0
+        for j in range(n):
+            s += M[i, j] * x[j]
+        if add:
+            out[i] += s
+        else:
+            out[i] = s
+        i += 1
+    return out
+
+
+@inline_jit
 def matvec(M, x, out):
     """out = M @ x (M (m, n), x (n,), out (m,)); returns out."""
-    m, n = M.shape
-    for i in range(m):
-        s = 0.0
-        for j in range(n):
-            s += M[i, j] * x[j]
-        out[i] = s
-    return out
+    return _rows(M, x, out, False)
 
 
-@jit
+@inline_jit
 def matvec_add(M, x, out):
     """out += M @ x; returns out."""
-    m, n = M.shape
-    for i in range(m):
-        s = 0.0
-        for j in range(n):
-            s += M[i, j] * x[j]
-        out[i] += s
-    return out
+    return _rows(M, x, out, True)
 
 
-@jit
+@inline_jit
 def dot(a, b):
     """a @ b for two vectors."""
     s = 0.0

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit, jit
 from flexlift.ascent.linalg import matvec, matvec_add
 from flexlift.ascent.records import BAG_ENCLOSED, BAG_OPEN_PARACHUTE, BAG_PAPER
 from flexlift.physics.gas import ambient_pressure, buoyancy, gas_volume, moles_of
@@ -36,7 +36,7 @@ from flexlift.physics.seabed import contact_load, in_contact
 from flexlift.physics.surface import waterline_volume
 
 
-@jit
+@inline_jit
 def bag_motion(plant, q, v, z, zd):
     """Heights [m] and vertical speeds [m/s] of the bag points (retained modes), into z, zd."""
     bags = plant.bags
@@ -44,7 +44,7 @@ def bag_motion(plant, q, v, z, zd):
     matvec(bags.shape, v, zd)
 
 
-@jit
+@inline_jit
 def bag_gas(plant, n, z, p, V):
     """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V (at the surface the
     part below the waterline: :func:`lifting_volume`)."""
@@ -54,7 +54,7 @@ def bag_gas(plant, n, z, p, V):
         V[i] = lifting_volume(plant, i, gas_volume(n[i], p[i], bags.RT, bags.capacity[i]), z[i])
 
 
-@jit
+@inline_jit
 def freeboard(plant, i, z):
     """How far [m] bag ``i``'s top stands above the surface with its point at height ``z``
     [m] (negative: below it)."""
@@ -62,7 +62,7 @@ def freeboard(plant, i, z):
     return z + bags.top_offset[i] - bags.water_depth
 
 
-@jit
+@inline_jit
 def lifting_volume(plant, i, volume, z):
     """The part [m^3] of bag ``i``'s gas ``volume`` that displaces water with its point at
     height ``z`` [m]: all of it below the surface; a bag with a surface law (any but
@@ -75,7 +75,7 @@ def lifting_volume(plant, i, volume, z):
                             bags.body_length[i], bags.cone_top[i], bags.kind[i] != BAG_ENCLOSED)
 
 
-@jit
+@inline_jit
 def tipped_spill(plant, i, n, p, z):
     """Gas [mol] an open bag spills when it tips: past its tip freeboard an open parachute bag
     (``BAG_OPEN_PARACHUTE``) keeps only its gas below the waterline (``n`` [mol] at the
@@ -87,7 +87,7 @@ def tipped_spill(plant, i, n, p, z):
     return max(n - moles_of(keep, p, bags.RT), 0.0)
 
 
-@jit
+@inline_jit
 def bag_forces(plant, V, zd, attached, current, point):
     """Force of every bag on the structure [N], into ``point``: buoyancy minus the bag's drag
     on its speed relative to the ``current`` [m/s], nothing once its sling is broken."""
@@ -117,7 +117,7 @@ def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, activ
     return w_min
 
 
-@jit
+@inline_jit
 def generalised_force(plant, line, point, b):
     """The explicit generalised force [N] into ``b``: strip line loads, bag forces, weight."""
     b[:] = plant.modal.weight_force
@@ -174,7 +174,7 @@ def implicit_matrix(plant, h, stiff, damp, out):
     out[:] = np.linalg.inv(M)
 
 
-@jit
+@inline_jit
 def trapezoidal_step(plant, q, v, b_mid, h, implicit, stiff, damp, work):
     """Advance q, q' by ``h`` [s] in place (trapezoidal rule, contact springs implicit, the
     other forces ``b_mid`` taken at mid-step); ``work`` (nr,) scratch."""

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit, jit
 from flexlift.ascent.linalg import dot, matvec, matvec_add
 from flexlift.ascent.mechanics import accelerations
 from flexlift.ascent.state import MAX_EVENTS
@@ -79,7 +79,7 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
     recorder.counts[0] = r + 1
 
 
-@jit
+@inline_jit
 def group_uplift(plant, V, attached, g):
     """Net uplift U_g of holding group ``g`` [N]: its bags' buoyancy minus its wet weight
     (a bag standing for ``count`` identical bags counted that many times)."""

@@ -46,7 +46,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit, jit
 from flexlift._struct import as_struct
 from flexlift.control.reference import trapezoid
 from flexlift.fuzzy.tables import bilinear, linear
@@ -154,8 +154,9 @@ def observe(t, z, zd, separated, controllers, control_state):
         control_state.zd_f[:] = zd
     elif controllers.filter_time > 0.0:
         a = 1.0 - math.exp(-controllers.period / controllers.filter_time)
-        control_state.z_f[:] += a * (z - control_state.z_f)
-        control_state.zd_f[:] += a * (zd - control_state.zd_f)
+        for i in range(nc):  # element by element: no temporary arrays at every sample
+            control_state.z_f[i] += a * (z[i] - control_state.z_f[i])
+            control_state.zd_f[i] += a * (zd[i] - control_state.zd_f[i])
     else:
         control_state.z_f[:] = z
         control_state.zd_f[:] = zd
@@ -184,7 +185,7 @@ def observe(t, z, zd, separated, controllers, control_state):
             control_state.adapt[i] = min(max(control_state.adapt[i] + step, -lim), lim)
 
 
-@jit
+@inline_jit
 def reference(tau, distance, controllers):
     """(position [m], velocity [m/s]) along the planned ascent ``tau`` [s] after its start over
     ``distance`` [m]: the trapezoid, or the valve-limited profile scaled to the distance."""
@@ -281,7 +282,7 @@ def act(V, controllers, control_state):
     control_state.flags[0] = True
 
 
-@jit
+@inline_jit
 def _purge(i, excess, controllers, control_state):
     """PID valve opening [-] of bag ``i`` on the volume ``excess`` [m^3]; conditional
     integration: the integral holds while the valve is saturated open or the PID is off."""
@@ -336,7 +337,7 @@ def _level(controllers, control_state):
             control_state.V_d[i] -= corr * (controllers.x[i] - mean) / half
 
 
-@jit
+@inline_jit
 def _levelled(i, controllers, control_state):
     """Whether bag ``i`` takes part in the levelling: live, and in a staged lift under way."""
     return control_state.active[i] and (not controllers.staged

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import math
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit
 
 
-@jit
+@inline_jit
 def trapezoid(tau, distance, speed, accel):
     """(position [m], velocity [m/s]) at ``tau`` [s] after the start of a move of
     ``distance`` [m] (signed) at most ``speed`` [m/s], accelerating and decelerating at

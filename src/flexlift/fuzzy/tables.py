@@ -12,10 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit, jit
 
 
-@jit
+@inline_jit
 def bilinear(values, lo0, hi0, lo1, hi1, x0, x1):
     """Bilinear interpolation in ``values`` (n0, n1), sampled evenly over [lo0, hi0] x
     [lo1, hi1], at (x0, x1) (floats; saturated to the box; NaN in, NaN out)."""
@@ -34,7 +34,7 @@ def bilinear(values, lo0, hi0, lo1, hi1, x0, x1):
     return lo + f1 * (c01 + f0 * (c11 - c01) - lo)
 
 
-@jit
+@inline_jit
 def linear(values, lo, hi, x):
     """Linear interpolation in ``values`` (n,), sampled evenly over [lo, hi], at ``x`` (a
     float; saturated; NaN in, NaN out). O(1): numba's ``np.interp`` validates the whole table

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexlift import constants as C
-from flexlift._jit import jit
+from flexlift._jit import inline_jit, jit
 
 
 def molar_energy(temperature: float = C.T_SEA) -> float:
@@ -24,21 +24,21 @@ def molar_energy(temperature: float = C.T_SEA) -> float:
     return C.R_GAS * temperature
 
 
-@jit
+@inline_jit
 def ambient_pressure(height, water_depth, p_atm, rho_g):
     """Pressure at ``height`` [m] above a seabed ``water_depth`` [m] deep [Pa]: p_atm [Pa] plus
     the water column rho_g (depth - height), no column above the surface."""
     return p_atm + rho_g * np.maximum(water_depth - height, 0.0)
 
 
-@jit
+@inline_jit
 def gas_volume(n, pressure, RT, capacity):
     """Volume [m^3] of ``n`` [mol] of gas at ambient ``pressure`` [Pa] (Boyle), at most the
     bag's ``capacity`` [m^3]: gas beyond it is spilled (open bag) or compressed (closed)."""
     return np.minimum(n * RT / pressure, capacity)
 
 
-@jit
+@inline_jit
 def moles_of(volume, pressure, RT):
     """Amount of gas [mol] that occupies ``volume`` [m^3] at ``pressure`` [Pa]."""
     return volume * pressure / RT
@@ -51,14 +51,14 @@ def moles_capacity(pressure, capacity, relief, RT):
     return (pressure + relief) * capacity / RT
 
 
-@jit
+@inline_jit
 def vented_moles(n, pressure, capacity, relief, RT):
     """Gas an open bag spills or a closed bag's relief valve vents at once [mol]: what ``n``
     [mol] holds beyond :func:`moles_capacity` (0 when within it)."""
     return np.maximum(n - (pressure + relief) * capacity / RT, 0.0)
 
 
-@jit
+@inline_jit
 def purge_flow(opening, volume, capacity, purge_max):
     """Purge outflow at local pressure [m^3/s] of a valve ``opening`` in [0, 1]: orifice flow
     driven by the gas column, u_v Q_out,max sqrt(V / V_max) (``purge_max`` Q_out,max
@@ -67,20 +67,20 @@ def purge_flow(opening, volume, capacity, purge_max):
     return np.minimum(np.maximum(opening, 0.0), 1.0) * purge_max * np.sqrt(frac)
 
 
-@jit
+@inline_jit
 def moles_rate(pressure, fill, purge, RT):
     """Rate of change of a bag's gas [mol/s] from the fill and purge flows [m^3/s] at the
     local ``pressure`` [Pa]: p (Q_in - Q_out) / (R T)."""
     return pressure * (fill - purge) / RT
 
 
-@jit
+@inline_jit
 def buoyancy(volume, rho_g):
     """Lift of a gas ``volume`` [m^3]: the weight of the water it displaces, rho g V [N]."""
     return rho_g * volume
 
 
-@jit
+@inline_jit
 def free_air(volume, pressure, p_atm):
     """A gas ``volume`` [m^3] at ``pressure`` [Pa] as free air at the surface [m^3]."""
     return volume * pressure / p_atm

@@ -18,10 +18,10 @@ import math
 
 import numpy as np
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit, jit
 
 
-@jit
+@inline_jit
 def drag(v, coeff):
     """Quadratic drag -coeff |v| v: a line load [N/m] for ``coeff`` = 1/2 rho C_D B [kg/m^2],
     a force [N] for ``coeff`` = 1/2 rho C_D A [kg/m]; ``v`` relative velocity [m/s]."""

@@ -20,13 +20,13 @@ import math
 
 import numpy as np
 
-from flexlift._jit import jit
+from flexlift._jit import inline_jit
 
 #: breakout is complete when the holding force falls below this fraction of H_0
 COMPLETE_FRACTION = 1e-3
 
 
-@jit
+@inline_jit
 def holding_rate(uplift, H0, breakout_time):
     """dH/dt while held [N/s] under the net ``uplift`` U [N]: -(H_0 / T_b)
     min(U / H_0, 1) for U > 0, else 0; ``H0`` [N], ``breakout_time`` T_b [s]."""
@@ -34,14 +34,14 @@ def holding_rate(uplift, H0, breakout_time):
     return -(H0 / breakout_time) * pull
 
 
-@jit
+@inline_jit
 def released_holding(H, dt, release_time):
     """Holding force [N] ``dt`` [s] after separation left it at ``H`` [N]: the exact decay
     H exp(-dt / tau_r) of dH/dt = -H / tau_r (``release_time`` tau_r [s])."""
     return H * np.exp(-dt / release_time)
 
 
-@jit
+@inline_jit
 def contact_load(w, wdot, stiffness, damping, bilateral):
     """Seabed line load [N/m] on a strip at height ``w`` [m] (0 = resting, up positive)
     moving at ``wdot`` [m/s]: -k w - c w' with ``stiffness`` k [N/m per m] and ``damping``
@@ -51,7 +51,7 @@ def contact_load(w, wdot, stiffness, damping, bilateral):
     return q * np.logical_or(bilateral, (w < 0.0) & (q > 0.0))
 
 
-@jit
+@inline_jit
 def in_contact(w, wdot, stiffness, damping):
     """True where a strip at ``w`` [m] moving at ``wdot`` [m/s] is pressed on the seabed (the
     one-sided :func:`contact_load` is active)."""
