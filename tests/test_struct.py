@@ -57,3 +57,27 @@ def test_a_named_tuple_inside_becomes_a_struct_inside():
     for _ in range(100):
         _nested(t)
     assert (sys.getrefcount(t.pair.a), sys.getrefcount(t.c)) == before
+
+
+@numba.njit
+def _through_struct(t):
+    s = as_struct(t)
+    total = 0.0
+    for i in range(s.a.size):
+        s.a[i] += 1.0
+        total += s.a[i]
+    return total
+
+
+def test_the_struct_borrows_strided_views_and_leaves_no_owner_behind():
+    """The struct's arrays are borrowed (no reference of their own, the tuple keeps them):
+    a strided view reads and writes the right elements, and after many calls the tuple's
+    arrays are the only owners, as before any call."""
+    base = np.arange(10.0)
+    t = Pair(base[::3], np.zeros(2), 0)  # elements 0, 3, 6, 9
+    before = sys.getrefcount(t.a), sys.getrefcount(base)
+    for _ in range(50):
+        _through_struct(t)
+    assert _through_struct(t) == (0 + 3 + 6 + 9) + 4 * 51
+    assert np.array_equal(base[[1, 2, 4]], [1.0, 2.0, 4.0])  # the others untouched
+    assert (sys.getrefcount(t.a), sys.getrefcount(base)) == before
