@@ -29,37 +29,102 @@ def test_one_command_builds_only_its_own_parser():
 
 
 def test_the_results_import_nothing_the_coordinator_did_not_import_meanwhile():
-    """With TAIL_MODULES imported (while the workers run), writing results.nc imports no
-    more of Dask (xarray asks for dask.array and distributed when Dask is installed)."""
+    """With TAIL_MODULES imported (while the workers run), building and writing results.nc
+    in :func:`without_dask` imports nothing more, and no Dask at all (xarray asks for
+    dask.array and distributed when Dask is installed); xarray is as it was afterwards."""
     pytest.importorskip("dask")
     code = ("import importlib, sys, numpy as np\n"
             "from flexlift.sweep.run import TAIL_MODULES\n"
+            "from flexlift.sweep.nodask import GUARDED, without_dask\n"
             "for m in TAIL_MODULES:\n"
-            "    try:\n        importlib.import_module(m)\n"
-            "    except ImportError:\n        pass\n"
+            "    importlib.import_module(m)\n"
             "import xarray as xr, tempfile, os\n"
+            "from xarray.namedarray import pycompat\n"
+            "fns = [getattr(importlib.import_module(m), n) for m, n, _ in GUARDED]\n"
             "before = set(sys.modules)\n"
-            "ds = xr.Dataset({'a': ('case', np.arange(3.0))})\n"
-            "with tempfile.TemporaryDirectory() as d:\n"
-            "    ds.to_netcdf(os.path.join(d, 'r.nc'), engine='scipy')\n"
+            "with without_dask():\n"
+            "    ds = xr.Dataset({'a': ('case', np.arange(3.0))}, coords={'case': [0, 1, 2]})\n"
+            "    with tempfile.TemporaryDirectory() as d:\n"
+            "        ds.to_netcdf(os.path.join(d, 'r.nc'), engine='scipy')\n"
+            "        back = xr.open_dataset(os.path.join(d, 'r.nc'), engine='scipy').load()\n"
             "new = sorted(m for m in set(sys.modules) - before\n"
             "             if m.split('.')[0] in ('dask', 'distributed', 'matplotlib'))\n"
-            "print(len(new), *new[:5])\n")
-    assert _run(code) == ["0"]
+            "print(len(new), *new[:5], back['a'].values.tolist() == [0.0, 1.0, 2.0])\n"
+            "print(fns == [getattr(importlib.import_module(m), n) for m, n, _ in GUARDED],\n"
+            "      'dask' in pycompat._cached_duck_array_modules)\n")
+    assert _run(code) == ["0", "True", "True", "False"]
 
 
-def test_the_fork_server_tells_xarray_no_dask_array_exists():
+def test_with_dask_imported_xarray_asks_dask_as_before():
+    """Once Dask is imported (a Dask engine), :func:`without_dask` changes nothing: with
+    DASK_TAIL imported meanwhile, the results import no more of Dask; a Dask array is one."""
     pytest.importorskip("dask")
-    code = ("import sys, numpy as np\n"
-            "from flexlift.sweep.warm import WARM, no_dask_arrays\n"
-            "print(int(WARM))\n"
+    code = ("import importlib, sys, numpy as np\n"
+            "from flexlift.sweep.run import DASK_TAIL, TAIL_MODULES\n"
+            "from flexlift.sweep.nodask import without_dask\n"
+            "for m in TAIL_MODULES + DASK_TAIL:\n"
+            "    importlib.import_module(m)\n"
+            "import xarray as xr, tempfile, os, dask.array as da\n"
+            "before = set(sys.modules)\n"
+            "with without_dask():\n"
+            "    ds = xr.Dataset({'a': ('case', np.arange(3.0))})\n"
+            "    lazy = xr.Dataset({'a': ('case', da.arange(3.0, chunks=1))})\n"
+            "    with tempfile.TemporaryDirectory() as d:\n"
+            "        ds.to_netcdf(os.path.join(d, 'r.nc'), engine='scipy')\n"
+            "new = sorted(m for m in set(sys.modules) - before\n"
+            "             if m.split('.')[0] in ('dask', 'distributed'))\n"
+            "print(len(new), *new[:5], lazy.chunks is not None and len(lazy.chunks) > 0)\n")
+    assert _run(code) == ["0", "True"]
+
+
+def test_the_fork_server_imports_no_dask_and_freezes_its_objects():
+    """The warm-up (the fork server's preload) builds its results without importing Dask;
+    its objects are frozen (the workers never scan them), and so are those left at its
+    exit (an atexit handler of flexlift._worker_process)."""
+    pytest.importorskip("dask")
+    code = ("import atexit, gc, sys, numpy as np\n"
+            "atexit.register(lambda: print('exit', int(gc.get_freeze_count() > 10000)))\n"
+            "import flexlift._worker_process\n"
+            "from flexlift.sweep.warm import WARM\n"
+            "print(int(WARM), int('dask' in sys.modules), int(gc.get_freeze_count() > 10000))\n"
+            "gc.unfreeze()\n"
             "import xarray as xr\n"
             "ds = xr.Dataset({'a': ('x', np.arange(3.0))}, coords={'x': [1, 2, 3]})\n"
-            "print(int('dask.array' in sys.modules), ds['a'].values.tolist() == [0.0, 1.0, 2.0])\n"
-            "import dask.array as da\n"
-            "print(int(no_dask_arrays()))\n")
+            "print(int('dask' in sys.modules), ds['a'].values.tolist() == [0.0, 1.0, 2.0])\n")
     # flexlift.sweep.warm warms the loop on import (its job in the fork server): a few seconds
-    assert _run(code) == ["1", "0", "True", "0"]
+    assert _run(code) == ["1", "0", "1", "0", "True", "exit", "1"]
+
+
+def test_a_command_exits_without_collecting_its_heap():
+    """The command line's process freezes its objects at exit (an atexit handler, once)
+    instead of collecting them while its modules are torn down (0.6-0.8 s of a sweep)."""
+    code = ("import atexit, gc\n"
+            "atexit.register(lambda: print('exit', int(gc.get_freeze_count() > 1000)))\n"
+            "from flexlift.cli import main\n"
+            "import contextlib, io\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    main(['--version']); main(['--version'])\n"
+            "print(int(gc.get_freeze_count() == 0))\n")
+    assert _run(code) == ["1", "exit", "1"]
+
+
+def test_the_coordinator_reads_a_spec_without_xarray_or_scipy():
+    """Reading a SPEC, drawing its cases and pricing them import neither xarray (the
+    results' module, imported while the cases run) nor scipy.special (only the normal laws
+    need it)."""
+    code = ("import sys\n"
+            "from flexlift.sweep import parse_spec\n"
+            "from flexlift.sweep.run import estimate_sweep\n"
+            "from flexlift.sweep.cases import make_cases\n"
+            "spec = parse_spec({'base': 'tanker', 'control': 'coordinated', 'monte_carlo': {\n"
+            "    'samples': 8, 'seed': 1, 'vary': {\n"
+            "        'seabed.breakout_time_s': {'dist': 'loguniform', 'low': 200, 'high': 800},\n"
+            "        'disturbance.current_m_s': {'dist': 'uniform', 'low': -0.2, 'high': 0.2}}}})\n"
+            "cases = make_cases(spec)\n"
+            "per, total = estimate_sweep(spec, 2)\n"
+            "print(len(cases), int(total > 0), *(int(m in sys.modules) for m in\n"
+            "      ('xarray', 'pandas', 'scipy.special', 'numba')))\n")
+    assert _run(code) == ["8", "1", "0", "0", "0", "0"]
 
 
 def test_a_summary_case_is_written_without_loading_the_ascent():

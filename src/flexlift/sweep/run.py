@@ -131,7 +131,7 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
             if progress is not None:
                 progress(len(records), len(cases), _failures(records))
             if not isinstance(engine, Serial) and len(records) < len(cases):
-                _import_meanwhile()
+                _import_meanwhile(engine)
             engine, ran_now, upto = _run_blocks(spec, cases, names, folder, records, engine,
                                                 progress)
             if spec.halfwidth is not None:
@@ -180,19 +180,27 @@ def _run_blocks(spec, cases, names, folder, records, engine, progress):
 
 
 #: what the results need and the coordinator imports while the workers run the cases
-TAIL_MODULES = ("flexlift.sweep.report", "scipy.io", "dask.array", "dask.distributed")
-# (with Dask installed, xarray imports dask.array at the first Dataset, and its netCDF writer
-# distributed, only to ask whether a Dask array or client is about: over half a second at the end)
+TAIL_MODULES = ("xarray", "flexlift.sweep.report", "scipy.io")
+#: and with Dask about (a Dask engine, or Dask imported before): xarray asks it for Dask arrays
+#: at the first Dataset, and for a Dask client in its netCDF writer (over half a second);
+#: without Dask it is not imported at all (:mod:`flexlift.sweep.nodask`)
+DASK_TAIL = ("dask.array", "dask.distributed")
 
 
-def _import_meanwhile() -> None:
-    """Import :data:`TAIL_MODULES` (matplotlib, the netCDF writer) in a background thread:
-    the coordinator waits on its workers anyway, so the results are not held up by them."""
+def _import_meanwhile(engine) -> None:
+    """Import :data:`TAIL_MODULES` (xarray, matplotlib, the netCDF writer; :data:`DASK_TAIL`
+    with Dask about) in a background thread: the coordinator waits on its workers anyway,
+    so the results are not held up by them."""
     import importlib
+    import sys
     import threading
 
+    names = TAIL_MODULES
+    if getattr(engine, "name", None) == "dask" or "dask" in sys.modules:
+        names += DASK_TAIL
+
     def load():
-        for name in TAIL_MODULES:
+        for name in names:
             try:
                 importlib.import_module(name)
             except Exception:  # the results import it again, and report any error there
@@ -335,6 +343,7 @@ def _lost(case: Case, exc: Exception) -> dict:
 # --------------------------------------------------------------------------- the results
 def _write_results(result: SweepResult, cases, names, folder) -> None:
     from flexlift.plumbing.atomic import atomic_file, write_json, write_text
+    from flexlift.sweep.nodask import without_dask
     from flexlift.sweep.report import render_report
 
     spec, records = result.spec, result.records
@@ -346,10 +355,11 @@ def _write_results(result: SweepResult, cases, names, folder) -> None:
              "failure_probability": json.dumps(summary["by_control"])}
     if spec.seed is not None:
         attrs.update(seed=str(spec.seed), samples=int(spec.samples))
-    ds = agg.build_dataset(spec, cases, names, records, attrs)
-    folder.claim("results.nc", "summary.json", "report.html")
-    with atomic_file(folder.path / "results.nc", suffix=".nc") as tmp:
-        ds.to_netcdf(tmp, engine="scipy")
+    with without_dask():  # no Dask in this process: xarray need not import it to hear so
+        ds = agg.build_dataset(spec, cases, names, records, attrs)
+        folder.claim("results.nc", "summary.json", "report.html")
+        with atomic_file(folder.path / "results.nc", suffix=".nc") as tmp:
+            ds.to_netcdf(tmp, engine="scipy")
     rerun = _write_reruns(spec, cases, names, summary, folder)
     write_json(folder.path / "summary.json", summary)
     write_text(folder.path / "report.html", render_report(result, summary, rerun))
