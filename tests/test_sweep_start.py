@@ -77,6 +77,21 @@ def test_with_dask_imported_xarray_asks_dask_as_before():
     assert _run(code) == ["0", "True"]
 
 
+def test_a_guarded_question_goes_to_xarray_once_dask_is_imported():
+    """:func:`forget_dask` answers xarray's questions about Dask objects only while Dask is
+    not imported: once it is, xarray's own code answers them."""
+    pytest.importorskip("dask")
+    code = ("import sys\n"
+            "from flexlift.sweep.nodask import forget_dask\n"
+            "print(int(forget_dask()))\n"
+            "from xarray.namedarray import utils\n"
+            "print(int(utils.is_dask_collection(1)), int('dask' in sys.modules))\n"
+            "import dask\n"
+            "print(int(utils.is_dask_collection(dask.delayed(1))),\n"
+            "      int(utils.is_dask_collection(1)))\n")
+    assert _run(code) == ["1", "0", "0", "1", "0"]
+
+
 def test_the_fork_server_imports_no_dask_and_freezes_its_objects():
     """The warm-up (the fork server's preload) builds its results without importing Dask;
     its objects are frozen (the workers never scan them), and so are those left at its
