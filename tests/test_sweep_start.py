@@ -158,3 +158,65 @@ def test_a_summary_case_is_written_without_loading_the_ascent():
             "print(int('flexlift.ascent' in sys.modules), int('numba' in sys.modules),\n"
             "      on_disk == rec, rec['histories'])\n")
     assert _run(code) == ["0", "0", "True", "[]"]
+
+
+def test_a_copy_computes_aside_or_says_it_cannot():
+    """:func:`flexlift.sweep.aside.start`: the value computed by a forked copy; None where a
+    thread runs besides the main one (forking would be unsafe); a copy that fails or takes
+    too long gives None, and is ended and reaped (no process left behind)."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the copy is forked on Linux only")
+    code = ("import os, threading, time\n"
+            "from flexlift.sweep import aside\n"
+            "a = aside.start(lambda x: {'twice': 2 * x, 'pid': os.getpid()}, 21)\n"
+            "r = a.result()\n"
+            "print(r['twice'], int(r['pid'] != os.getpid()))\n"
+            "print(aside.start(lambda: 1 / 0).result())\n"
+            "slow = aside.start(time.sleep, 30)\n"
+            "t = time.monotonic(); print(slow.result(limit_s=0.5), int(time.monotonic() - t < 5))\n"
+            "try:\n"
+            "    os.kill(slow.pid or 0, 0) if slow.pid else None\n"
+            "    print('ended', int(slow.pid is None))\n"
+            "except ProcessLookupError:\n"
+            "    print('ended', 1)\n"
+            "stop = threading.Event()\n"
+            "th = threading.Thread(target=stop.wait); th.start()\n"
+            "print(aside.start(lambda: 1)); stop.set(); th.join()\n")
+    assert _run(code) == ["42", "1", "None", "None", "1", "ended", "1", "None"]
+
+
+def test_the_report_drawn_aside_is_the_report_drawn_here():
+    """The sweep's report with its figures drawn by a forked copy is byte for byte the
+    report drawn in one process (but the time it states); the copy drew them."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the copy is forked on Linux only")
+    code = ("import re, tempfile\n"
+            "from flexlift.sweep import aside, parse_spec, run_sweep\n"
+            "from flexlift.sweep import run\n"
+            "from flexlift.sweep.cases import case_name, make_cases\n"
+            "from flexlift.sweep.executors import Serial\n"
+            "from flexlift.sweep.store import SweepFolder\n"
+            "spec = parse_spec({'base': 'tanker', 'control': 'coordinated',\n"
+            "                   'set': {'simulation.duration_s': 50}, 'monte_carlo': {\n"
+            "    'samples': 12, 'seed': 2, 'vary': {'seabed.breakout_time_s':\n"
+            "        {'dist': 'uniform', 'low': 200, 'high': 800}}}})\n"
+            "cases = make_cases(spec)\n"
+            "names = {c.index: case_name(spec, c.index) for c in cases}\n"
+            "drawn = []\n"
+            "start = aside.start\n"
+            "def counted(fn, makers):\n"
+            "    copy = start(fn, makers)\n"
+            "    drawn.append(sorted(makers) if copy is not None else None)\n"
+            "    return copy\n"
+            "aside.start = counted\n"
+            "pages = []\n"
+            "with tempfile.TemporaryDirectory() as d:\n"
+            "    result = run_sweep(spec, d + '/out', engine=Serial())\n"
+            "    with SweepFolder.open(d + '/out', spec) as folder:\n"
+            "        for can in (True, False):\n"
+            "            aside.can_fork = (lambda c=can: c)\n"
+            "            run._write_results(result, cases, names, folder)\n"
+            "            text = (folder.path / 'report.html').read_text()\n"
+            "            pages.append(re.sub(r'\\d{4}-\\d\\d-\\d\\d \\d\\d:\\d\\d UTC', '', text))\n"
+            "print(int(pages[0] == pages[1]), int(pages[0].count('data:image/png') >= 2), *drawn[1:])\n")
+    assert _run(code) == ["1", "1", "['cdfs',", "'tornado:coordinated']", "None"]
