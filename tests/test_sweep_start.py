@@ -214,9 +214,37 @@ def test_the_report_drawn_aside_is_the_report_drawn_here():
             "    result = run_sweep(spec, d + '/out', engine=Serial())\n"
             "    with SweepFolder.open(d + '/out', spec) as folder:\n"
             "        for can in (True, False):\n"
-            "            aside.can_fork = (lambda c=can: c)\n"
+            "            aside.can_fork = aside.spare_core = (lambda c=can: c)\n"
             "            run._write_results(result, cases, names, folder)\n"
             "            text = (folder.path / 'report.html').read_text()\n"
             "            pages.append(re.sub(r'\\d{4}-\\d\\d-\\d\\d \\d\\d:\\d\\d UTC', '', text))\n"
-            "print(int(pages[0] == pages[1]), int(pages[0].count('data:image/png') >= 2), *drawn[1:])\n")
-    assert _run(code) == ["1", "1", "['cdfs',", "'tornado:coordinated']", "None"]
+            "print(int(pages[0] == pages[1]), int(pages[0].count('data:image/png') >= 2), drawn[-1])\n")
+    assert _run(code) == ["1", "1", "['cdfs',", "'tornado:coordinated']"]
+
+
+def test_a_copy_is_made_only_with_a_core_to_spare(monkeypatch):
+    """The sweep's end forks its copy only while fewer threads are ready to run than this
+    process has cores (/proc/loadavg's running count, this process's included)."""
+    import builtins
+    import io
+    import os
+
+    from flexlift.sweep import aside
+
+    real_open = builtins.open
+    loadavg = {"text": ""}
+
+    def fake_open(path, *args, **kwargs):
+        if path == "/proc/loadavg":
+            return io.StringIO(loadavg["text"])
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "open", fake_open)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    seen = []
+    for running in (1, 2, 5):
+        loadavg["text"] = f"0.50 0.40 0.30 {running}/321 4567\n"
+        seen.append(aside.spare_core())
+    loadavg["text"] = "garbled\n"
+    seen.append(aside.spare_core())
+    assert seen == [True, False, False, False]

@@ -1,6 +1,6 @@
 """Work done beside this process: a forked copy of it computes one function's value while this
-process goes on with its own work (the sweep's end draws its report's figures so, on the core
-its workers no longer use).
+process goes on with its own work (the sweep's end draws its report's figures so, on a core
+its workers no longer use, when one is free: :func:`spare_core`).
 
 Only where forking is safe and cheap: on Linux, in a process with no thread but its main one
 (a thread holding a lock at the fork would leave the copy waiting on it for good; the sweep's
@@ -25,6 +25,20 @@ import time
 
 #: the longest the copy may take before this process does the work itself [s]
 LIMIT_S = 120.0
+
+
+def spare_core() -> bool:
+    """Whether a core is free for a copy now: fewer threads ready to run on this machine
+    (``/proc/loadavg``'s running count, this process's included) than the cores this process
+    may use. On a busy machine a copy would only share this process's core with it, and
+    cost the copy's own start; where it cannot be told (not Linux), False."""
+    try:
+        with open("/proc/loadavg") as f:
+            running = int(f.read().split()[3].split("/")[0])
+        cores = len(os.sched_getaffinity(0))
+    except (OSError, ValueError, IndexError, AttributeError):
+        return False
+    return running < cores
 
 
 def can_fork() -> bool:

@@ -350,8 +350,8 @@ def _lost(case: Case, exc: Exception) -> dict:
 def _write_results(result: SweepResult, cases, names, folder) -> None:
     """results.nc, the rerun files, summary.json and report.html. The report's figures (most
     of this work) are drawn meanwhile by a forked copy of this process where that is safe
-    (:mod:`flexlift.sweep.aside`; the convergence figures here), else here: the same
-    figures either way."""
+    and a core is free (:mod:`flexlift.sweep.aside`; the convergence figures here), else
+    here: the same figures either way."""
     from flexlift.plumbing.atomic import write_json, write_text
     from flexlift.sweep import aside
     from flexlift.sweep.report import figure_makers, render_figures, render_report
@@ -361,7 +361,9 @@ def _write_results(result: SweepResult, cases, names, folder) -> None:
     result.summary = summary
     makers = figure_makers(result, summary)
     here = {k: f for k, f in makers.items() if k.startswith("convergence:")}
-    copy = aside.start(render_figures, {k: f for k, f in makers.items() if k not in here})
+    copy = None
+    if aside.spare_core():  # else a copy would share this process's core: no faster
+        copy = aside.start(render_figures, {k: f for k, f in makers.items() if k not in here})
     try:
         _write_dataset(result, cases, names, folder, summary)
         rerun = _write_reruns(spec, cases, names, summary, folder)
