@@ -18,7 +18,9 @@ returns.
 from __future__ import annotations
 
 import argparse
+import atexit
 import contextlib
+import gc
 import importlib
 import logging
 import signal
@@ -64,6 +66,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    _exit_without_collecting()
     words = sys.argv[1:] if argv is None else list(argv)
     command = next((w for w in words if not w.startswith("-")), None)  # no global option takes a value
     if command == "sweep":
@@ -110,6 +113,21 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, previous)
     held.flush_to(sys.stderr)
     return code
+
+
+def _exit_without_collecting() -> None:
+    """Have the interpreter's exit freeze the garbage collector's objects (an atexit handler,
+    registered once per process). Tearing down the modules a command imported (numpy,
+    xarray, pandas, matplotlib, Dask) otherwise runs collections over the whole heap: 0.6-0.8
+    s of a sweep's end, after its last output is written. Nothing else is skipped: the atexit
+    handlers run, and the standard streams are flushed, as before."""
+    global _EXIT_FROZEN
+    if not _EXIT_FROZEN:
+        atexit.register(gc.freeze)
+        _EXIT_FROZEN = True
+
+
+_EXIT_FROZEN = False
 
 
 class Terminated(BaseException):

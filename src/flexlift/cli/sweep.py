@@ -87,7 +87,10 @@ class _Bar:
         if self.bar is None:
             from tqdm import tqdm
 
-            self.bar = tqdm(total=total, initial=done, unit="case", file=sys.stderr,
+            class Bar(tqdm):  # no monitor thread: the sweep's end may fork (sweep/aside.py)
+                monitor_interval = 0
+
+            self.bar = Bar(total=total, initial=done, unit="case", file=sys.stderr,
                             desc=f"sweep ({self.engine})", dynamic_ncols=True, smoothing=0.05,
                             mininterval=0.5)
         self.bar.update(done - self.bar.n)

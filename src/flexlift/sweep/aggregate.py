@@ -24,7 +24,6 @@ import json
 import math
 
 import numpy as np
-import xarray as xr
 
 #: z of a two-sided 95 % interval
 Z95 = 1.959963984540054
@@ -252,7 +251,7 @@ def _events_text(events: list[dict]) -> str:
                      for e in events)
 
 
-def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Dataset:
+def build_dataset(spec, cases, names: dict, records: dict, attrs: dict):
     """The sweep as one dataset: ``case`` x ``control``, the varied keys as coordinates."""
     modes, n = list(spec.controls), len(cases)
     coords = {"case": ("case", np.arange(n), {"long_name": "case index"}),
@@ -310,6 +309,8 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict) -> xr.Da
         data[f"criterion_{c}"] = (("case", "control"), arr, {**flag_attrs, "long_name": long})
     for h, arr in nums.items():
         data[h] = (("case", "control"), arr, {"units": _unit(h), "long_name": f"headline {h}"})
+    import xarray as xr  # here: the coordinator imports it while the cases run
+
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 

@@ -10,6 +10,7 @@ failed or were lost with their messages.
 from __future__ import annotations
 
 import base64
+import functools
 import html
 from datetime import UTC, datetime
 
@@ -61,10 +62,41 @@ def _table(head: list[str], rows: list[list[str]], left: int = 1) -> str:
     return f"<table><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>"
 
 
-def _figure(fig, caption: str) -> str:
-    if fig is None:
+def figure_makers(result, summary: dict) -> dict:
+    """The report's figures: {name: a function drawing it (a figure, or None where there is
+    nothing to draw)}, by the names :func:`render_report` reads them under."""
+    spec, records = result.spec, result.records
+    keys = list(spec.keys)
+    out = {}
+    if spec.method != "sobol":
+        for m in spec.controls:
+            curve = summary.get("convergence", {}).get(m, {})
+            if curve.get("n", []):
+                out[f"convergence:{m}"] = functools.partial(plots.convergence, curve)
+            out[f"tornado:{m}"] = functools.partial(plots.tornado, summary["headline_sensitivity"],
+                                                    m, keys)
+    out["cdfs"] = functools.partial(plots.cdfs, records, spec.controls, _limits(spec))
+    return out
+
+
+def render_figures(makers: dict) -> dict:
+    """{name: the figure as PNG bytes, or None} for the ``makers`` of :func:`figure_makers`."""
+    out = {}
+    for name, make in makers.items():
+        fig = make()
+        out[name] = None if fig is None else plots.png(fig)
+    return out
+
+
+def _limits(spec) -> dict:
+    return {k: v for k, v in agg.limits_of(spec.base).items()
+            if agg.LIMITED[k] not in spec.keys}  # a limit that varies has no one line
+
+
+def _figure(png: bytes | None, caption: str) -> str:
+    if png is None:
         return ""
-    data = base64.b64encode(plots.png(fig)).decode("ascii")
+    data = base64.b64encode(png).decode("ascii")
     return (f'<figure><img alt="{_e(caption)}" src="data:image/png;base64,{data}">'
             f"<figcaption>{_e(caption)}</figcaption></figure>")
 
@@ -114,7 +146,7 @@ def _sobol(summary: dict, mode: str) -> str:
     return "".join(parts)
 
 
-def _convergence(summary: dict, mode: str) -> str:
+def _convergence(summary: dict, mode: str, pngs: dict) -> str:
     """Each probability against the number of cases, with its Wilson interval."""
     curve = summary.get("convergence", {}).get(mode, {})
     ns = curve.get("n", [])
@@ -132,7 +164,7 @@ def _convergence(summary: dict, mode: str) -> str:
         stop = (f"<p>Run until every 95 % half-width was at most "
                 f"{_pct(summary['until_halfwidth'])} (checked at each block's end, "
                 f"{summary['block']} cases): stopped at {summary['stopped_at']:,} cases.</p>")
-    return (stop + _figure(plots.convergence(curve),
+    return (stop + _figure(pngs.get(f"convergence:{mode}"),
                            f"Each probability against the number of cases ({mode} control), "
                            "with its 95 % Wilson interval.")
             + _table(["cases", *[k.replace("_", " ") for k in names]], rows))
@@ -238,12 +270,14 @@ def _failures(summary: dict) -> str:
     return _table(["case", "status", "message"], rows, left=3) + more
 
 
-def render_report(result, summary: dict, rerun: dict) -> str:
-    """The HTML page of a finished sweep (``rerun``: case index -> its scenario file)."""
-    spec, records = result.spec, result.records
+def render_report(result, summary: dict, rerun: dict, pngs: dict | None = None) -> str:
+    """The HTML page of a finished sweep (``rerun``: case index -> its scenario file;
+    ``pngs``: figures drawn already, by :func:`render_figures`; the others are drawn here)."""
+    spec = result.spec
     keys = list(spec.keys)
-    limits = {k: v for k, v in agg.limits_of(spec.base).items()
-              if agg.LIMITED[k] not in spec.keys}  # a limit that varies has no one line
+    given = pngs or {}
+    makers = {k: f for k, f in figure_makers(result, summary).items() if k not in given}
+    pngs = {**given, **render_figures(makers)}
     when = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     parts = [f"<h1>Sweep of {_e(spec.base.name)}: {summary['cases']:,} cases</h1>",
              f'<p class="meta">flexlift {_e(__version__)}, {when}; base {_e(spec.base_ref)} '
@@ -267,14 +301,14 @@ def render_report(result, summary: dict, rerun: dict) -> str:
                   "every criterion and as failed to run; an incomplete case (every limit held, "
                   "the run ended before the target was held) fails the criterion reached target "
                   "but is not a failure of the lift; lost cases are not counted.</p>",
-                  f"<h2>Convergence: {_e(m)} control</h2>", _convergence(summary, m),
+                  f"<h2>Convergence: {_e(m)} control</h2>", _convergence(summary, m, pngs),
                   f"<h2>Influence of the keys: {_e(m)} control</h2>", _influence(summary, m, keys),
-                  _figure(plots.tornado(summary["headline_sensitivity"], m, keys),
+                  _figure(pngs.get(f"tornado:{m}"),
                           f"Spearman rank correlation of each key with the headline numbers ({m} control): "
                           "a tornado of the keys' influence."),
                   f"<h2>Worst cases: {_e(m)} control</h2>", _worst(summary, m, rerun, keys)]
     parts += ["<h2>Distributions of the headline numbers</h2>",
-              _figure(plots.cdfs(records, spec.controls, limits),
+              _figure(pngs.get("cdfs"),
                       "Empirical CDFs over the completed cases; dashed: the limit."),
               "<h2>Failed and lost cases</h2>", _failures(summary)]
     if summary["warnings"]:

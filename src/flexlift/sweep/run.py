@@ -130,8 +130,9 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
             skipped = len(records)
             if progress is not None:
                 progress(len(records), len(cases), _failures(records))
+            importing = None
             if not isinstance(engine, Serial) and len(records) < len(cases):
-                _import_meanwhile()
+                importing = _import_meanwhile(engine)
             engine, ran_now, upto = _run_blocks(spec, cases, names, folder, records, engine,
                                                 progress)
             if spec.halfwidth is not None:
@@ -140,14 +141,17 @@ def run_sweep(spec: SweepSpec, out, engine=None, progress=None) -> SweepResult:
                 skipped = min(skipped, len(records))
             result = SweepResult(spec, folder.path, getattr(engine, "name", "none"), records,
                                  skipped, ran_now, round(time.perf_counter() - t0, 3))
+            if engine is not None:  # the cases are done: the results need no engine
+                engine.close()
+                engine = None
+            if importing is not None:  # the results need them (and a process to fork alone)
+                importing.join()
             _write_results(result, cases, names, folder)
             folder.finish()
     except BaseException:
         if engine is not None:
             engine.close(cancel=True)
         raise
-    if engine is not None:
-        engine.close()
     return result
 
 
@@ -180,25 +184,35 @@ def _run_blocks(spec, cases, names, folder, records, engine, progress):
 
 
 #: what the results need and the coordinator imports while the workers run the cases
-TAIL_MODULES = ("flexlift.sweep.report", "scipy.io", "dask.array", "dask.distributed")
-# (with Dask installed, xarray imports dask.array at the first Dataset, and its netCDF writer
-# distributed, only to ask whether a Dask array or client is about: over half a second at the end)
+TAIL_MODULES = ("xarray", "flexlift.sweep.report", "scipy.io")
+#: and with Dask about (a Dask engine, or Dask imported before): xarray asks it for Dask arrays
+#: at the first Dataset, and for a Dask client in its netCDF writer (over half a second);
+#: without Dask it is not imported at all (:mod:`flexlift.sweep.nodask`)
+DASK_TAIL = ("dask.array", "dask.distributed")
 
 
-def _import_meanwhile() -> None:
-    """Import :data:`TAIL_MODULES` (matplotlib, the netCDF writer) in a background thread:
-    the coordinator waits on its workers anyway, so the results are not held up by them."""
+def _import_meanwhile(engine):
+    """Import :data:`TAIL_MODULES` (xarray, matplotlib, the netCDF writer; :data:`DASK_TAIL`
+    with Dask about) in a background thread: the coordinator waits on its workers anyway,
+    so the results are not held up by them. Returns the thread."""
     import importlib
+    import sys
     import threading
 
+    names = TAIL_MODULES
+    if getattr(engine, "name", None) == "dask" or "dask" in sys.modules:
+        names += DASK_TAIL
+
     def load():
-        for name in TAIL_MODULES:
+        for name in names:
             try:
                 importlib.import_module(name)
             except Exception:  # the results import it again, and report any error there
                 log.debug("could not import %s ahead", name, exc_info=True)
 
-    threading.Thread(target=load, name="flexlift-import", daemon=True).start()
+    thread = threading.Thread(target=load, name="flexlift-import", daemon=True)
+    thread.start()
+    return thread
 
 
 def _blocks(spec: SweepSpec, cases: list[Case]):
@@ -334,25 +348,52 @@ def _lost(case: Case, exc: Exception) -> dict:
 
 # --------------------------------------------------------------------------- the results
 def _write_results(result: SweepResult, cases, names, folder) -> None:
-    from flexlift.plumbing.atomic import atomic_file, write_json, write_text
-    from flexlift.sweep.report import render_report
+    """results.nc, the rerun files, summary.json and report.html. The report's figures (most
+    of this work) are drawn meanwhile by a forked copy of this process where that is safe
+    and a core is free (:mod:`flexlift.sweep.aside`; the convergence figures here), else
+    here: the same figures either way."""
+    from flexlift.plumbing.atomic import write_json, write_text
+    from flexlift.sweep import aside
+    from flexlift.sweep.report import figure_makers, render_figures, render_report
 
-    spec, records = result.spec, result.records
+    spec = result.spec
     summary = summarize(result)
     result.summary = summary
+    makers = figure_makers(result, summary)
+    here = {k: f for k, f in makers.items() if k.startswith("convergence:")}
+    copy = None
+    if aside.spare_core():  # else a copy would share this process's core: no faster
+        copy = aside.start(render_figures, {k: f for k, f in makers.items() if k not in here})
+    try:
+        _write_dataset(result, cases, names, folder, summary)
+        rerun = _write_reruns(spec, cases, names, summary, folder)
+        write_json(folder.path / "summary.json", summary)
+        pngs = render_figures(here)
+        if copy is not None:
+            pngs.update(copy.result() or {})  # what it did not draw is drawn here
+    finally:
+        if copy is not None:
+            copy.close()
+    write_text(folder.path / "report.html", render_report(result, summary, rerun, pngs))
+
+
+def _write_dataset(result: SweepResult, cases, names, folder, summary) -> None:
+    """results.nc: the sweep as one dataset (:func:`flexlift.sweep.aggregate.build_dataset`)."""
+    from flexlift.plumbing.atomic import atomic_file
+    from flexlift.sweep.nodask import without_dask
+
+    spec, records = result.spec, result.records
     attrs = {"title": f"flexlift sweep of {spec.base.name}", "flexlift_version": __version__,
              "spec_checksum": spec.checksum(), "base_checksum": spec.base.checksum(),
              "method": spec.method, "engine": result.engine,
              "failure_probability": json.dumps(summary["by_control"])}
     if spec.seed is not None:
         attrs.update(seed=str(spec.seed), samples=int(spec.samples))
-    ds = agg.build_dataset(spec, cases, names, records, attrs)
-    folder.claim("results.nc", "summary.json", "report.html")
-    with atomic_file(folder.path / "results.nc", suffix=".nc") as tmp:
-        ds.to_netcdf(tmp, engine="scipy")
-    rerun = _write_reruns(spec, cases, names, summary, folder)
-    write_json(folder.path / "summary.json", summary)
-    write_text(folder.path / "report.html", render_report(result, summary, rerun))
+    with without_dask():  # no Dask in this process: xarray need not import it to hear so
+        ds = agg.build_dataset(spec, cases, names, records, attrs)
+        folder.claim("results.nc", "summary.json", "report.html")
+        with atomic_file(folder.path / "results.nc", suffix=".nc") as tmp:
+            ds.to_netcdf(tmp, engine="scipy")
 
 
 def _write_reruns(spec, cases, names, summary, folder) -> dict[int, str]:

@@ -6,37 +6,20 @@ on a busy machine) is paid once per sweep instead of once per worker and per new
 pool is renewed after a worker dies). A failure here only means each worker loads the code
 itself on its first case.
 
-The server's xarray is also told that no Dask array exists (:func:`no_dask_arrays`): with Dask
-installed, xarray otherwise imports ``dask.array`` (half a second, more than a third of the
-warm-up) at its first Dataset only to ask whether each array is one.
+The server's xarray is also told that Dask is not about (:func:`flexlift.sweep.nodask.
+forget_dask`): with Dask installed, xarray otherwise imports ``dask`` and ``dask.array`` at its
+first Dataset only to ask whether each array is a Dask array (0.1-0.5 s of the warm-up).
+
+Last, the server's objects are frozen (:func:`gc.freeze`): the workers forked from it never
+scan them in their own garbage collections, nor write to their pages.
 """
 
 from __future__ import annotations
 
+import gc
 import logging
-import sys
 
 log = logging.getLogger(__name__)
-
-
-def no_dask_arrays() -> bool:
-    """Tell this process's xarray that Dask arrays do not exist here, unless ``dask.array`` is
-    imported already; True when done. A Dask array cannot exist in a process that never
-    imported ``dask.array``, and the sweep's workers build their results from numpy arrays
-    only: xarray's answer ("not a Dask array") is the same, without the import. Harmless when
-    xarray's internals differ (then nothing is changed)."""
-    if "dask.array" in sys.modules:
-        return False
-    try:
-        from packaging.version import Version
-        from xarray.namedarray import pycompat
-
-        none = object.__new__(pycompat.DuckArrayModule)  # "not installed", as xarray says it
-        none.module, none.version, none.type, none.available = None, Version("0.0.0"), (), False
-        return pycompat._cached_duck_array_modules.setdefault("dask", none) is none
-    except Exception:  # another xarray: it imports dask.array itself, as before
-        log.debug("xarray's Dask check left as it is", exc_info=True)
-        return False
 
 
 def warm_up() -> bool:
@@ -44,8 +27,9 @@ def warm_up() -> bool:
     try:
         from flexlift.ascent import simulate
         from flexlift.scenario import load_scenario
+        from flexlift.sweep.nodask import forget_dask
 
-        no_dask_arrays()
+        forget_dask()
         tanker = load_scenario("tanker")
         for mode in ("coordinated", "paper"):
             simulate(tanker, control=mode, duration=1.0)
@@ -56,3 +40,4 @@ def warm_up() -> bool:
 
 
 WARM = warm_up()
+gc.freeze()
