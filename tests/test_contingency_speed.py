@@ -132,3 +132,16 @@ def test_the_worst_kept_as_cases_return_are_the_reports_worst_ties_in_case_order
             for i in rng.sample(range(len(given)), len(given)):
                 worst.offer(i, given[i], {"m": {"time": np.zeros(1)}})
             assert [i for _, i, _ in worst.kept] == R.worst_cases(summary), given
+
+
+def test_the_command_starts_its_workers_fork_server_first(monkeypatch):
+    """``flexlift contingency`` starts the fork server before its own imports, as ``flexlift
+    sweep`` does (the workers' warm-up runs meanwhile); other commands do not."""
+    from flexlift import cli
+    from flexlift.sweep import executors
+
+    seen = []
+    monkeypatch.setattr(executors, "start_early", lambda words: seen.append(list(words)))
+    assert cli.main(["contingency", "--help"]) == 0
+    assert cli.main(["simulate", "--help"]) == 0
+    assert seen == [["contingency", "--help"]]
