@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     _exit_without_collecting()
     words = sys.argv[1:] if argv is None else list(argv)
     command = next((w for w in words if not w.startswith("-")), None)  # no global option takes a value
-    if command == "sweep":
+    if command in ("sweep", "contingency"):
         from flexlift.sweep.executors import start_early  # the workers warm up meanwhile
 
         start_early(words)

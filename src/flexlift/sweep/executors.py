@@ -78,8 +78,9 @@ def start_forkserver():
 
 
 def start_early(argv: list[str]) -> None:
-    """Start the fork server first thing for ``flexlift sweep`` run on local processes (the
-    default), before the command line's own imports: ``argv`` the command's arguments."""
+    """Start the fork server first thing for ``flexlift sweep`` or ``flexlift contingency`` run
+    on local processes (the default), before the command line's own imports: ``argv`` the
+    command's arguments."""
     if any(a in ("-h", "--help", "--scheduler", "--dask-local") or a.startswith(
             ("--scheduler=", "--dask-local=", "--workers=1")) for a in argv):
         return

@@ -270,10 +270,12 @@ def _failures(records: dict) -> int:
 
 
 def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, progress,
-             fn=None) -> None:
+             fn=None, aside=None) -> None:
     """Run ``todo`` on ``engine`` (each case a :class:`~flexlift.sweep.worker.Task` given to
     ``fn``, by default :func:`~flexlift.sweep.worker.run_case`), writing each record into
-    ``folder`` and ``records`` as it returns; ``progress(done, total, failed)``."""
+    ``folder`` and ``records`` as it returns; ``progress(done, total, failed)``;
+    ``aside(case index, record)`` first, for what ``fn`` returned beside the record (it may
+    take it out of the record: the rest is written)."""
     fn = fn or run_case  # looked up now (a test may replace the module's run_case)
     queue = collections.deque(todo)
     suspects: collections.deque[Case] = collections.deque()
@@ -304,6 +306,9 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
                     log.info("case %d: worker lost (%s); retrying it once", case.index, exc)
                     suspects.append(case)
                     continue
+            else:
+                if aside is not None:  # what the worker returned beside the record
+                    aside(case.index, record)
             record.update(values=dict(case.values), noise_seed=case.seed, run_id=run_id,
                           attempts=attempts[case.index])
             records[case.index] = folder.write_case(names[case.index], record, datasets)

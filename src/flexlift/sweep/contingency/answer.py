@@ -40,9 +40,16 @@ LIMIT_EVENTS = {"limit_ascent_velocity": "upward speed over its limit",
 REASON_CHARS = 200
 
 
+#: the record's key of the case's time traces (:func:`trace`); taken out of the record by the
+#: coordinator before the record is written (:func:`take_traces`)
+TRACES = "_traces"
+
+
 def run_fault_case(task: Task) -> tuple[dict, dict]:
     """Run one case (:func:`~flexlift.sweep.worker.run_case`) and add to its control mode's
-    result its ``answer`` (:func:`case_answer`); no histories are returned."""
+    result its ``answer`` (:func:`case_answer`); no histories are returned, only the few
+    traces the report draws of the worst cases (``record[TRACES]``, {mode: :func:`trace`}),
+    which the coordinator takes out of the record (:func:`take_traces`) before writing it."""
     record, datasets = run_case(dataclasses.replace(task, histories=True, stop_beyond=True))
     for mode, res in record["results"].items():
         ds = datasets.get(mode)
@@ -52,10 +59,41 @@ def run_fault_case(task: Task) -> tuple[dict, dict]:
             continue
         scenario = task.base.with_changes(**task.changes)
         res["answer"] = case_answer(res, ds, scenario, mode)
+        record.setdefault(TRACES, {})[mode] = trace(ds)
         # the case's scenario file, written as the worker's (parallel) work: the coordinator
         # only saves it as the rerun file
         record["scenario_yaml"] = scenario.to_yaml()
     return record, {}
+
+
+def warm_plant(scenario, mode: str) -> bool:
+    """Build, in the worker that runs this, the plant of ``scenario`` (each case's scenario
+    but for its fault) for ``mode`` (:func:`~flexlift.sweep.plants.plant_for` keeps it for the
+    worker's cases): sent to every worker as the study starts, while the coordinator runs the
+    fault-free run. True when built; a failure only means the first case builds it."""
+    from flexlift.sweep.plants import plant_for
+
+    try:
+        plant_for(scenario, mode)
+    except Exception:  # the case reports whatever is wrong with its scenario
+        return False
+    return True
+
+
+def trace(ds) -> dict:
+    """What the report draws of a case's run (``ds`` its dataset): ``time`` [s], the bags'
+    mean ``height`` [m], the largest bag ``speed`` (absolute) [m/s] and the hull's ``pitch``
+    [deg], one value per recorded row."""
+    return {"time": np.asarray(ds.time.values, dtype=float),
+            "height": ds.height.values.mean(axis=1),
+            "speed": np.abs(ds.ascent_velocity.values).max(axis=1),
+            "pitch": np.degrees(ds.pitch.values)}
+
+
+def take_traces(record: dict) -> dict:
+    """The traces of a worker's ``record`` ({mode: :func:`trace`}), removed from it (they
+    are the report's, never written with the case)."""
+    return record.pop(TRACES, None) or {}
 
 
 def one_line(text: str, limit: int = REASON_CHARS) -> str:

@@ -11,8 +11,6 @@ from __future__ import annotations
 import base64
 import html
 
-import numpy as np
-
 from flexlift.sweep import plots
 from flexlift.sweep.contingency.cases import KIND_TEXT, KINDS
 from flexlift.sweep.report import _CSS
@@ -115,13 +113,12 @@ def _histories(summary: dict, histories: dict) -> str:
         return ""
     rows = {r["index"]: r for r in summary["cases"]}
     fig, axes = plots.new_figure(3, 1, (8.0, 7.5), sharex=False)
-    for i, ds in histories.items():
+    for i, tr in histories.items():
         r = rows[i]
         label = f"{r['case']}: {KIND_TEXT[r['kind']]}, {r['bag']}, {r['phase']}"
-        t = ds.time.values
-        axes[0].plot(t, ds.height.values.mean(axis=1), label=label)
-        axes[1].plot(t, np.abs(ds.ascent_velocity.values).max(axis=1))
-        axes[2].plot(t, np.degrees(ds.pitch.values))
+        axes[0].plot(tr["time"], tr["height"], label=label)
+        axes[1].plot(tr["time"], tr["speed"])
+        axes[2].plot(tr["time"], tr["pitch"])
     axes[0].set_ylabel("mean bag height [m]")
     axes[1].set_ylabel("largest |bag speed| [m/s]")
     axes[2].set_ylabel("hull pitch [deg]")
@@ -135,7 +132,8 @@ def _histories(summary: dict, histories: dict) -> str:
 
 def render_report(summary: dict, histories: dict) -> str:
     """The page for ``summary`` (:func:`~flexlift.sweep.contingency.run.run_contingency`) and
-    the worst cases' datasets ``histories`` ({case index: dataset})."""
+    the worst cases' traces ``histories`` ({case index:
+    :func:`~flexlift.sweep.contingency.answer.trace`})."""
     tol = summary["tolerant"]
     ph = _table(["phase", "time [s]", "how"], [[_e(p["name"]), _num(p["time_s"], "{:.1f}"),
                                                  _e(p["how"])] for p in summary["phases"]])

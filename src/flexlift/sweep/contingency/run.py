@@ -24,7 +24,7 @@ from flexlift.errors import InputError
 from flexlift.sweep import aggregate as agg
 from flexlift.sweep.cases import Case, case_name
 from flexlift.sweep.contingency import margin as mg
-from flexlift.sweep.contingency.answer import HEADLINE, run_fault_case
+from flexlift.sweep.contingency.answer import HEADLINE, run_fault_case, take_traces, warm_plant
 from flexlift.sweep.contingency.cases import KINDS, check_kinds, make_cases, noisy
 from flexlift.sweep.contingency.phases import PHASES, find_phases
 from flexlift.sweep.spec import SweepSpec
@@ -125,28 +125,36 @@ def run_contingency(scenario, out, mode: str | None = None, phases=PHASES, times
     mode = mode or scenario.control.mode
     scenario = scenario.with_changes(faults=[])
     workers = getattr(engine, "workers", 1) if engine is not None else 1
-    base, found, cases, groups, reps, plain_s = plan_study(
-        scenario, mode, phases, times, kinds, all_bags, workers, yes)
-    if announce is not None:
-        announce(len(cases), f"{len(cases)} cases: {len({c.bag for c in cases})} bags"
-                 + (" (one representative per lift point and type)" if reps else " (every bag)")
-                 + f" x {len({c.kind for c in cases})} kinds x "
-                 f"{len({c.phase for c in cases})} phases")
-    spec = study_spec(scenario, mode, cases, f"contingency of {scenario.name}")
-    names = {c.index: case_name(spec, c.index) for c in cases}
     records: dict = {}
     try:
+        if workers > 1:  # the workers start (and build the plant) during the fault-free run
+            _warm(engine, scenario, mode)
+        base, found, cases, groups, reps, plain_s = plan_study(
+            scenario, mode, phases, times, kinds, all_bags, workers, yes)
+        if announce is not None:
+            announce(len(cases), f"{len(cases)} cases: {len({c.bag for c in cases})} bags"
+                     + (" (one representative per lift point and type)" if reps
+                        else " (every bag)")
+                     + f" x {len({c.kind for c in cases})} kinds x "
+                     f"{len({c.phase for c in cases})} phases")
+        spec = study_spec(scenario, mode, cases, f"contingency of {scenario.name}")
+        names = {c.index: case_name(spec, c.index) for c in cases}
+        worst = Worst(WORST, mode, list(base.criteria), agg.limits_of(scenario))
         with SweepFolder.open(out, spec) as folder:
             records = folder.finished(names)
-            todo = [Case(c.index, {"faults": [c.fault()]}) for c in cases
+            for i, r in records.items():  # resumed: their traces are run again if drawn
+                worst.offer(i, _answer(r, mode), {})
+            todo = [Case(c.index, {"faults": [c.fault()]}) for c in submission_order(cases)
                     if c.index not in records]
             if progress is not None:
                 progress(len(records), len(cases), 0)
             if todo and engine is None:
                 engine = make_engine()
             if todo:
+                _import_meanwhile()
                 _execute(engine, spec, todo, names, folder, records, folder.inc.run_id,
-                         progress, fn=run_fault_case)
+                         progress, fn=run_fault_case,
+                         aside=lambda i, r: worst.offer(i, _answer(r, mode), take_traces(r)))
             answers = {c.index: _answer(records[c.index], mode) for c in cases}
             margin = {}
             if margins:
@@ -154,7 +162,7 @@ def run_contingency(scenario, out, mode: str | None = None, phases=PHASES, times
             summary = _summary(scenario, mode, base, found, cases, names, groups, reps,
                                answers, margin, records, plain_s, time.perf_counter() - t0,
                                getattr(engine, "name", "none"), folder.path)
-            _write(folder, summary, spec, cases, names, records)
+            _write(folder, summary, spec, cases, names, records, worst)
             folder.finish()
     except BaseException:
         if engine is not None:
@@ -163,6 +171,56 @@ def run_contingency(scenario, out, mode: str | None = None, phases=PHASES, times
     if engine is not None:
         engine.close()
     return ContingencyResult(summary, Path(out), records)
+
+
+def _warm(engine, scenario, mode: str) -> None:
+    """One :func:`~.answer.warm_plant` per worker of ``engine``, not waited for: the pool's
+    workers start, and build the cases' plant, while this process runs the fault-free run.
+    Submitted from a background thread: a local pool's first submission waits until its
+    fork server has loaded the compiled loop (:mod:`flexlift.sweep.warm`)."""
+    import threading
+
+    base = scenario.with_changes(**{"control.mode": mode, "faults": []})
+
+    def submit():
+        try:
+            for _ in range(int(getattr(engine, "workers", 1))):
+                engine.submit(warm_plant, base, mode)
+        except Exception:  # the cases' own submissions start the workers, or say why not
+            pass
+
+    threading.Thread(target=submit, name="flexlift-warm", daemon=True).start()
+
+
+#: the kinds whose cases cost the most (a lost bag or sling can resettle the hull and then run
+#: to the end at every step), submitted first so that no long case is left for the end
+COSTLY = ("bag_rupture", "sling_break")
+
+
+def submission_order(cases: list) -> list:
+    """The cases in the order they are submitted: the :data:`COSTLY` kinds first, each part
+    in case order (the order of the results is the cases', whatever this is)."""
+    return sorted(cases, key=lambda c: c.kind not in COSTLY)
+
+
+#: what the results need and the coordinator imports while the workers run the cases
+TAIL_MODULES = ("flexlift.sweep.contingency.report", "matplotlib.pyplot",
+                "flexlift.plumbing.atomic")
+
+
+def _import_meanwhile() -> None:
+    """Import :data:`TAIL_MODULES` in a background thread while the workers run the cases."""
+    import importlib
+    import threading
+
+    def load():
+        for name in TAIL_MODULES:
+            try:
+                importlib.import_module(name)
+            except Exception:  # imported again where needed, and any error reported there
+                pass
+
+    threading.Thread(target=load, name="flexlift-import", daemon=True).start()
 
 
 def _width(n: int) -> int:
@@ -216,7 +274,7 @@ def _margins(engine, spec, cases, answers, folder, scenario, mode):
         if todo:
             engine = engine or make_engine()
             _execute(engine, spec, todo, names, folder, done, folder.inc.run_id, None,
-                     fn=run_fault_case)
+                     fn=run_fault_case, aside=lambda i, r: take_traces(r))
         for k, (i, s, _) in runs.items():
             search[i].tell(s, _answer(done[k], mode)["outcome"] in SURVIVED)
     out = {}
@@ -232,6 +290,17 @@ def _margins(engine, spec, cases, answers, folder, scenario, mode):
     return out, engine
 
 
+def severity(a: dict, criteria: list, limits: dict) -> tuple:
+    """The sweep's severity (:func:`~flexlift.sweep.aggregate.severity`, larger is worse) of
+    a case's answer ``a``; a case beyond the model's validity by its peaks up to then."""
+    h = a.get("headline", {})
+    if a.get("validity_end_s") is not None:
+        h = {**h, **{name: a.get(k) for k, name in HEADLINE.items()}}
+    res = {"status": a.get("status") or "completed", "outcome": a["outcome"],
+           "criteria": a.get("criteria", {}), "headline": h}
+    return agg.severity(res, criteria, limits)
+
+
 def _summary(scenario, mode, base, found, cases, names, groups, reps, answers, margin,
              records, plain_s, elapsed, engine, out) -> dict:
     limits = agg.limits_of(scenario)
@@ -244,17 +313,7 @@ def _summary(scenario, mode, base, found, cases, names, groups, reps, answers, m
                "margin": margin.get(c.index)}
         rows.append(row)
     fails = [r for r in rows if r["answer"]["outcome"] not in SURVIVED]
-
-    def sev(r):
-        a = answers[r["index"]]
-        h = a.get("headline", {})
-        if a.get("validity_end_s") is not None:  # beyond validity: its peaks up to then
-            h = {**h, **{name: a.get(k) for k, name in HEADLINE.items()}}
-        res = {"status": a.get("status") or "completed", "outcome": a["outcome"],
-               "criteria": a.get("criteria", {}), "headline": h}
-        return agg.severity(res, criteria, limits)
-
-    fails.sort(key=sev, reverse=True)
+    fails.sort(key=lambda r: severity(answers[r["index"]], criteria, limits), reverse=True)
     bo = base.outcome
     tolerant = not fails and bo.get("kind") in SURVIVED
     if tolerant:
@@ -281,7 +340,7 @@ def _summary(scenario, mode, base, found, cases, names, groups, reps, answers, m
     }
 
 
-def _write(folder, summary, spec, cases, names, records) -> None:
+def _write(folder, summary, spec, cases, names, records, worst=None) -> None:
     from flexlift.plumbing.atomic import write_json, write_text
     from flexlift.sweep.cases import changes
     from flexlift.sweep.contingency.report import render_report
@@ -298,31 +357,73 @@ def _write(folder, summary, spec, cases, names, records) -> None:
     for row in summary["cases"]:
         row["rerun"] = reruns[row["index"]]
     write_json(folder.path / "contingency.json", summary)
-    write_text(folder.path / "report.html", render_report(summary, _histories(summary, base)))
+    kept = worst.traces() if worst is not None else {}
+    write_text(folder.path / "report.html", render_report(summary, _histories(summary, base,
+                                                                              kept)))
 
 
 #: the cases whose time histories the report draws
 WORST = 3
 
 
-def _histories(summary: dict, base) -> dict:
-    """The worst :data:`WORST` cases' time histories (the failures first, by severity; then
-    the cases with the largest upward speed), run again here as the workers ran them (each
-    stopped once beyond the model's validity): ``{case index: dataset}``."""
-    from flexlift.ascent import simulate
-    from flexlift.errors import SimulationError
-
+def worst_cases(summary: dict, n: int = WORST) -> list[int]:
+    """The indices of the ``n`` cases whose histories the report draws, worst first: the
+    failures by severity (as ``summary["failures"]``), then the cases with the largest upward
+    speed (ties in case order)."""
     rows = {r["index"]: r for r in summary["cases"]}
     order = list(summary["failures"])
     rest = sorted((i for i in rows if i not in order),
                   key=lambda i: -(rows[i]["answer"].get("up_ms") or 0.0))
+    return (order + rest)[:n]
+
+
+class Worst:
+    """The traces (:func:`~.answer.trace`) of the cases that are the ``n`` worst so far, as
+    the workers return them: the report draws the worst cases' traces as their workers ran
+    them, without running them again. :meth:`offer` every case once (its answer, and its
+    traces or ``{}``); the order is :func:`worst_cases`'s (larger :func:`rank` is worse)."""
+
+    def __init__(self, n: int, mode: str, criteria: list, limits: dict):
+        self.n, self.mode, self.criteria, self.limits = n, mode, criteria, limits
+        self.kept: list[tuple] = []  # (rank, index, traces or None), worst first
+
+    def rank(self, index: int, answer: dict) -> tuple:
+        """The sort key of a case (larger is worse): a failure by its severity, then a
+        survived case by its upward speed; the earlier case first among equals."""
+        if answer["outcome"] not in SURVIVED:
+            return (1, severity(answer, self.criteria, self.limits), -index)
+        return (0, answer.get("up_ms") or 0.0, -index)
+
+    def offer(self, index: int, answer: dict, traces: dict) -> None:
+        self.kept.append((self.rank(index, answer), index, traces.get(self.mode)))
+        self.kept.sort(key=lambda e: e[0], reverse=True)
+        del self.kept[self.n:]
+
+    def traces(self) -> dict:
+        """{case index: traces} of the kept cases that have them."""
+        return {i: tr for _, i, tr in self.kept if tr is not None}
+
+
+def _histories(summary: dict, base, kept: dict | None = None) -> dict:
+    """The traces of the worst :data:`WORST` cases (:func:`worst_cases`): those the workers
+    returned (``kept``), else (a case resumed from the folder) run again here as the workers
+    ran it (stopped once beyond the model's validity): ``{case index: traces}``."""
+    from flexlift.errors import SimulationError
+    from flexlift.sweep.contingency.answer import trace
+
+    kept = kept or {}
+    rows = {r["index"]: r for r in summary["cases"]}
     out = {}
-    for i in (order + rest)[:WORST]:
-        r = rows[i]
+    for i in worst_cases(summary):
+        if i in kept:
+            out[i] = kept[i]
+            continue
+        from flexlift.ascent import simulate
+
         try:
-            out[i] = simulate(base.with_changes(faults=[r["fault"]]),
-                              control=summary["control"], stop_beyond=True).dataset
+            out[i] = trace(simulate(base.with_changes(faults=[rows[i]["fault"]]),
+                                    control=summary["control"], stop_beyond=True).dataset)
         except SimulationError as exc:
             if exc.partial is not None:
-                out[i] = exc.partial.dataset
+                out[i] = trace(exc.partial.dataset)
     return out
