@@ -83,10 +83,11 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
 def group_uplift(plant, V, attached, g):
     """Net uplift U_g of holding group ``g`` [N]: its bags' buoyancy minus its wet weight
     (a bag standing for ``count`` identical bags counted that many times)."""
+    bags = plant.bags  # read once: each read of a struct out of a struct is a reference
     total = 0.0
     for i in range(V.size):
-        if plant.bags.group[i] == g:
-            total += plant.bags.rho_g * V[i] * attached[i] * plant.bags.count[i]
+        if bags.group[i] == g:
+            total += bags.rho_g * V[i] * attached[i] * bags.count[i]
     return total - plant.seabed.group_weight[g]
 
 
