@@ -15,9 +15,10 @@ step's time (tanker: 2.4 µs a step owned, 1.7 µs borrowed, the same numbers to
 The tuple passed to the compiled call keeps the arrays alive for as long as the struct lives;
 a struct's array must never be returned to Python or kept past the call.
 
-Only numba's public StructRef API is used: ``structref.register`` for the type and its
+Only numba's public extension APIs are used: ``structref.register`` for the type and its
 attributes, ``structref.new`` to allocate one (as numba's own ``define_constructor`` does; it
-frees the struct and releases its arrays). tests/test_struct.py checks the sharing and that no
+frees the struct), and ``numba.extending.intrinsic`` for :func:`_borrow` (the array's data
+model as numba's own ``carray`` fills it). tests/test_struct.py checks the sharing and that no
 reference is leaked.
 """
 
