@@ -41,8 +41,14 @@ class Struct(types.StructRef):
 
 def as_struct(tup):
     """``as_struct(t)`` in compiled code: a :class:`Struct` with the fields of the named
-    tuple ``t``, referring to the same arrays (their reference counts taken once); a named
-    tuple inside ``t`` becomes a struct inside it (``plant.bags.capacity``)."""
+    tuple ``t``, referring to the same arrays, borrowed (no reference of their own: module
+    docstring); a named tuple inside ``t`` becomes a struct inside it
+    (``plant.bags.capacity``).
+
+    ``t`` must be an argument the compiled function was called with from Python (Python
+    then keeps its arrays alive for the whole call), never a tuple built inside compiled code
+    (its arrays may be freed while the struct still points at them), and no array read out
+    of the struct may be returned to Python (it would point into memory it does not keep)."""
     raise TypeError("as_struct is for compiled code only")
 
 
