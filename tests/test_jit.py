@@ -160,3 +160,32 @@ def test_the_warm_check_finds_the_loop_numba_wrote(tmp_path, monkeypatch):
     assert cache_is_warm()
     monkeypatch.setattr(jit_module, "_FOLDER", tmp_path)  # an empty cache folder
     assert not cache_is_warm()
+
+
+_INTERPRETED = '''
+import json, sys
+import numpy as np
+from flexlift.scenario import load_scenario
+from flexlift.ascent import simulate
+ds = simulate(load_scenario("tanker"), duration=20.0).dataset
+print(json.dumps({v: np.asarray(ds[v].values, dtype=float).ravel().tolist()
+                  for v in ("height", "gas_volume", "sling_force", "net_flow")}))
+'''
+
+
+def test_the_loop_runs_interpreted_under_numba_disable_jit():
+    """``NUMBA_DISABLE_JIT=1`` runs the loop as Python (the structs become namespaces of the
+    same arrays) and gives the compiled loop's numbers."""
+    import json
+
+    import numpy as np
+
+    runs = []
+    for disable in ("0", "1"):
+        env = {**os.environ, "PYTHONPATH": str(SRC), "NUMBA_DISABLE_JIT": disable}
+        out = subprocess.run([sys.executable, "-c", _INTERPRETED], env=env, capture_output=True,
+                             text=True, timeout=600)
+        assert out.returncode == 0, out.stderr[-2000:]
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    for name, values in runs[0].items():
+        np.testing.assert_allclose(runs[1][name], values, rtol=1e-9, atol=1e-9, err_msg=name)

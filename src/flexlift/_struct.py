@@ -24,6 +24,9 @@ reference is leaked.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+import numba
 from numba.core import cgutils, types
 from numba.experimental import structref
 from numba.extending import intrinsic, overload
@@ -49,7 +52,16 @@ def as_struct(tup):
     then keeps its arrays alive for the whole call), never a tuple built inside compiled code
     (its arrays may be freed while the struct still points at them), and no array read out
     of the struct may be returned to Python (it would point into memory it does not keep)."""
-    raise TypeError("as_struct is for compiled code only")
+    if not numba.config.DISABLE_JIT:
+        raise TypeError("as_struct is for compiled code only")
+    # NUMBA_DISABLE_JIT: the compiled code runs as Python; a namespace of the same fields,
+    # the same arrays
+    return SimpleNamespace(**{name: as_struct(value) if _is_named_tuple(value) else value
+                              for name, value in zip(tup._fields, tup)})
+
+
+def _is_named_tuple(value) -> bool:
+    return isinstance(value, tuple) and hasattr(value, "_fields")
 
 
 def _struct_type(tup):
