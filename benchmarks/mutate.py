@@ -159,7 +159,7 @@ MUTATIONS = (
       "work[i] = h * s - 0.5 * h * h * kv", "work[i] = h * s",
       "the trapezoidal rule's -h^2/2 K v term dropped (first order)"),
     M("uplift-sling", "ascent/recording.py",
-      "total += plant.bags.rho_g * V[i] * attached[i]", "total += plant.bags.rho_g * V[i]",
+      "total += bags.rho_g * V[i] * attached[i]", "total += bags.rho_g * V[i]",
       "the hold's uplift still counts a broken sling's bag"),
     # ------------------------------------------------------------------ gas and hold in the loop
     M("purge-orifice-loop", "ascent/kernel.py",
