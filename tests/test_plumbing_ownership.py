@@ -57,3 +57,40 @@ def test_a_failed_write_leaves_a_file_that_replaced_its_temporary(tmp_path):
         with atomic.atomic_file(target) as tmp2:
             raise RuntimeError("the write fails")
     assert not tmp2.exists()  # its own temporary is removed
+
+
+@pytest.mark.parametrize("planted", ["symlink", "hardlink", "new_file"])
+def test_a_claim_writes_only_the_journal_the_run_created(tmp_path, planted):
+    """A link or another file planted under the journal's name during a run: the claim fails
+    and the file outside the output is untouched (the journal is opened without following a
+    link, never created by a claim, and written only while it is the file start() made)."""
+    outside = tmp_path / "outside.txt"
+    outside.write_text("the user's\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    j = Journal(out).start()
+    os.unlink(out / JOURNAL)
+    if planted == "symlink":
+        os.symlink(outside, out / JOURNAL)
+    elif planted == "hardlink":
+        os.link(outside, out / JOURNAL)
+    else:
+        (out / JOURNAL).write_text('"a.txt"\n')
+    try:
+        with pytest.raises(OSError):
+            j.claim("x.txt")
+    finally:
+        j.close()
+    assert outside.read_text() == "the user's\n"
+    if planted == "new_file":
+        assert (out / JOURNAL).read_text() == '"a.txt"\n'
+
+
+def test_the_journal_is_let_go_at_the_end_of_the_run(tmp_path):
+    from flexlift.plumbing.marker import journaled
+
+    with journaled(tmp_path) as j:
+        fd = j._fd
+        os.fstat(fd)  # held during the run
+    with pytest.raises(OSError):
+        os.fstat(fd)  # closed after it

@@ -95,6 +95,7 @@ class Journal:
         self.root = Path(root)
         self.path = self.root / JOURNAL
         self.ident = ident
+        self._fd: int | None = None
 
     def start(self) -> Journal:
         """Create the journal anew. One left by an earlier run of this command (read before)
@@ -109,9 +110,17 @@ class Journal:
                 os.unlink(self.path)
         fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW, 0o644)
         st = os.fstat(fd)
-        os.close(fd)
+        # held open until close(): while it is, no other file can take its inode number, so
+        # the identity a claim checks cannot be met by a file planted after it was removed
+        self._fd = fd
         self.ident = (st.st_dev, st.st_ino)
         return self
+
+    def close(self) -> None:
+        """Let go of the journal :meth:`start` created (idempotent)."""
+        fd, self._fd = getattr(self, "_fd", None), None
+        if fd is not None:
+            os.close(fd)
 
     def claim(self, *relpaths: str) -> None:
         """Append ``relpaths`` before they are created (one write: whole lines or none), to
@@ -119,7 +128,10 @@ class Journal:
         if not relpaths:
             return
         line = "".join(json.dumps(r) + "\n" for r in relpaths).encode("utf-8")
-        # O_NONBLOCK: a FIFO planted under the name fails here instead of blocking the run
+        # no O_CREAT: a claim never creates a file (start() made the journal with O_EXCL);
+        # O_NOFOLLOW: never through a link; O_NONBLOCK: a FIFO planted under the name fails
+        # here instead of blocking the run; and nothing is written unless the file opened is
+        # the one start() created (a hard link or another file in its place is refused)
         fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_NONBLOCK | _NOFOLLOW)
         try:
             st = os.fstat(fd)
@@ -195,6 +207,7 @@ def journaled(root: Path) -> Iterator[Journal]:
         yield journal
     finally:
         _ACTIVE.pop(journal.root, None)
+        journal.close()
 
 
 def active_roots() -> tuple[tuple[str, tuple[int, int] | None], ...]:
