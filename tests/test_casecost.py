@@ -142,3 +142,80 @@ def test_all_cluster_keys_at_once_are_each_bags_key(mode):
         assert keys == [cluster_key(P, C, i) for i in range(len(P.names))]
         if sc is fifty:
             assert len(set(keys)) < len(keys)  # the 73 bags do share
+
+
+def test_compiled_integrals_are_numpys_bit_for_bit():
+    """The run's strength integrates its line loads compiled: the same sums in the same order
+    as :func:`line_integrals` (jumps, uneven spacing, many rows)."""
+    from flexlift.ascent.strength import compiled_integrals
+    from flexlift.loads.strength import line_integrals
+
+    rng = np.random.default_rng(11)
+    for n in (2, 3, 445, 1200):
+        x = np.sort(np.concatenate([rng.uniform(0.0, 180.0, n - 2), [0.0, 180.0]]))
+        x[n // 2] = x[n // 2 - 1]  # a jump
+        q = rng.normal(size=(23, n)) * 1e5
+        for got, want in zip(compiled_integrals(x, q), line_integrals(x, q)):
+            assert got.shape == want.shape
+            assert np.array_equal(got.view(np.uint64), want.view(np.uint64)), n
+
+
+SUMMARY_CASES = {
+    "tanker": ("tanker", {}),
+    "incomplete": ("tanker", {"simulation.duration_s": 2500.0}),
+    "never separated": ("tanker", {"simulation.duration_s": 600.0}),
+    "unsafe": ("tanker", {"limits.ascent_velocity_m_s": 0.12}),
+    "not achieved": ("tanker", {"control.volume_deadband_m3": 5.0,
+                                "limits.arrival_tolerance_m": 0.2}),
+    "pipeline": ("pipeline", {}),
+    "trawler": (str(TRAWLER), {}),
+}
+
+
+@pytest.mark.parametrize("name", list(SUMMARY_CASES))
+@pytest.mark.parametrize("mode", ["coordinated", "paper"])
+def test_a_summary_only_case_is_the_full_cases_summary(name, mode):
+    """``keep: summary`` builds no Dataset (a :class:`Frame` of the same arrays): the digest a
+    sweep records, and the run's summary, are the full result's, value for value, for safe,
+    unsafe, not-achieved, incomplete and never-separated runs, on three structures and the
+    paper's plant."""
+    import json
+
+    from flexlift.ascent import simulate
+    from flexlift.ascent.result import Frame
+    from flexlift.scenario import load_scenario
+    from flexlift.sweep.worker import _one_mode
+
+    base, changes = SUMMARY_CASES[name]
+    sc = load_scenario(base).with_changes(**changes)
+    light, frame = _one_mode(sc, mode, summary_only=True)
+    full, ds = _one_mode(sc, mode, summary_only=False)
+    assert json.dumps(light, sort_keys=True) == json.dumps(full, sort_keys=True)
+    if frame is None:  # the paper's plant refuses the trawler (a failed record, the same)
+        assert (name, mode) == ("trawler", "paper") and full["status"] == "failed"
+        return
+    assert isinstance(frame, Frame) and not isinstance(ds, Frame)
+    a = simulate(sc, control=mode, summary_only=True)
+    b = simulate(sc, control=mode)
+    assert json.dumps(a.summary(), sort_keys=True) == json.dumps(b.summary(), sort_keys=True)
+    assert a.dataset.attrs == b.dataset.attrs
+    for name_, (dims, values, *_) in a.dataset.variables.items():
+        assert tuple(b.dataset[name_].dims) == ((dims,) if isinstance(dims, str) else dims)
+        assert np.array_equal(np.asarray(values), b.dataset[name_].values, equal_nan=True) \
+            if np.asarray(values).dtype.kind == "f" else \
+            np.array_equal(np.asarray(values), b.dataset[name_].values)
+    assert set(a.dataset.variables) == set(b.dataset.variables)
+
+
+def test_a_frames_max_skips_nan_as_xarrays_does():
+    import xarray as xr
+
+    from flexlift.ascent.result import Frame
+
+    for vals in ([1.0, np.nan, 3.0], [np.nan, np.nan], [2.0, -1.0]):
+        arr = np.array(vals)
+        f = Frame({"u": (("x",), arr, {})}, {})
+        want = float(xr.DataArray(arr).max())
+        got = float(f["u"].max())
+        assert (np.isnan(got) and np.isnan(want)) or got == want
+        assert "u" in f and "v" not in f and np.array_equal(f.u.values, arr, equal_nan=True)

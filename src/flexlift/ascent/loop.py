@@ -61,7 +61,7 @@ HELD_MARGIN = 0.05
 def simulate(scenario, control: str | None = None, duration: float | None = None,
              engine="table", progress=None, plant: Plant | None = None,
              share: bool = True, step_control: bool = True,
-             stop_beyond: bool = False) -> Result:
+             stop_beyond: bool = False, summary_only: bool = False) -> Result:
     """Simulate the ascent of ``scenario``.
 
     Parameters
@@ -97,6 +97,10 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
         follows is outside the small-deflection model's validity. For the single-failure
         study (:mod:`flexlift.sweep.contingency.answer`), whose answer reads nothing after
         that moment; the rows up to it are those of a full run (default False: run on).
+    summary_only : bool, optional
+        Return the result's arrays in a plain :class:`~flexlift.ascent.result.Frame`, not an
+        xarray Dataset: the same criteria, headline, events, outcome and arrays, for a caller
+        that reads the summary only (a sweep's ``keep: summary``; default False).
 
     Returns
     -------
@@ -130,7 +134,7 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
         warn_short(scenario, plant)
     run = Ascent(scenario, plant, mode, T_end, engine, share, step_control)
     run.stop_beyond = stop_beyond
-    return run.run(progress)
+    return run.run(progress, summary_only)
 
 
 def held_steps(settings: Settings) -> int:
@@ -224,7 +228,7 @@ class Ascent:
         state.H_rate[:] = np.nan
         kernel.initial_equilibrium(self.inputs())
 
-    def run(self, progress=None) -> Result:
+    def run(self, progress=None, summary_only: bool = False) -> Result:
         settings, state, recorder = self.settings, self.state, self.recorder
         fi, error = 0, None
         whole = self._expected_steps() if progress is not None else settings.n_steps
@@ -251,7 +255,7 @@ class Ascent:
         if progress is not None:
             progress(1.0)
         self._per_bag()
-        result = build_result(self, error)
+        result = build_result(self, error, summary_only)
         if error:
             raise SimulationError(error + " (results kept up to that moment)", partial=result)
         return result

@@ -75,9 +75,10 @@ EVENT_KINDS = {EV_LIMIT_DESCENT: "limit_descent_velocity", EV_SEPARATION: "separ
 
 @dataclass(frozen=True)
 class Result:
-    """One simulated ascent. ``dataset`` holds everything; the properties read its attrs."""
+    """One simulated ascent. ``dataset`` holds everything (a :class:`Frame` of the same
+    arrays when the run recorded a summary only); the properties read its attrs."""
 
-    dataset: xr.Dataset
+    dataset: xr.Dataset | Frame
 
     @property
     def events(self) -> list[dict]:
@@ -208,8 +209,9 @@ def snapshots(run) -> dict:
             "current": rec.snap_current[:n].copy(), "noise": rec.snap_noise[:n].copy()}
 
 
-def build_result(run, error: str | None) -> Result:
-    """The Dataset of a finished (or failed) run."""
+def build_result(run, error: str | None, summary_only: bool = False) -> Result:
+    """The Dataset of a finished (or failed) run (``summary_only``: the same arrays and
+    attributes in a :class:`Frame`, no Dataset)."""
     from flexlift.ascent.strength import seabed_profile, strength
     from flexlift.physics.gas import buoyancy
 
@@ -278,7 +280,7 @@ def build_result(run, error: str | None) -> Result:
     for name, long in DAF_VARS.items():
         data[name] = (("bag",), daf[name], {"units": "1" if name.startswith("daf") else "N",
                                              "long_name": long})
-    ds = xr.Dataset(data, coords=coords)
+    ds = Frame(data, coords) if summary_only else xr.Dataset(data, coords=coords)
     _attributes(ds, run, events, t, Mmax, Vmax, error)
     return Result(ds)
 
@@ -296,6 +298,37 @@ class _Values:
 
     def __init__(self, values):
         self.values = values
+
+    def max(self):
+        """The largest value, NaN skipped as xarray's ``max`` does (NaN when all are)."""
+        v = np.asarray(self.values)
+        v = v[~np.isnan(v)] if v.dtype.kind == "f" else v
+        return v.max() if v.size else np.nan
+
+
+class Frame:
+    """A result's arrays without an xarray Dataset (``simulate(..., summary_only=True)``, a
+    sweep's ``keep: summary``): the same variables, coordinates and attributes, read as a
+    Dataset's are (``frame.height.values``, ``frame["x"].values``, ``"x" in frame``,
+    ``frame.attrs``), each variable's (dimensions, values, attributes) in ``variables``.
+    What a summary reads is the same numbers either way; a Dataset costs a few
+    milliseconds to build, a sizeable part of a sweep's short case."""
+
+    def __init__(self, data: dict, coords: dict):
+        self.variables = {**coords, **data}
+        self.attrs: dict = {}
+
+    def __contains__(self, name) -> bool:
+        return name in self.variables
+
+    def __getitem__(self, name):
+        item = self.variables[name]
+        return _Values(np.asarray(item[1]))
+
+    def __getattr__(self, name):
+        if name.startswith("_") or name not in self.__dict__.get("variables", {}):
+            raise AttributeError(name)
+        return self[name]
 
 
 def section_modulus(scenario, x) -> np.ndarray:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexlift._jit import jit
 from flexlift.loads.strength import shear_moment
 from flexlift.physics import gas, hydro, seabed
 
@@ -193,8 +194,31 @@ def strength(plant, snaps: dict):
     for a in range(0, nt, chunk):
         part = {k: v[a:a + chunk] for k, v in snaps.items()}
         V[a:a + chunk], M[a:a + chunk] = shear_moment(
-            x, line_loads(plant, xe, part, grid), point_loads(plant, part), keep)
+            x, line_loads(plant, xe, part, grid), point_loads(plant, part), keep,
+            integrate=compiled_integrals)
     return x[keep], V, M
+
+
+def compiled_integrals(x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`flexlift.loads.strength.line_integrals` of line loads ``q`` (nt, nx), compiled:
+    the same sums in the same order (the same numbers), without its temporary arrays."""
+    q = np.ascontiguousarray(q, dtype=float)
+    Vq, Mq = np.empty_like(q), np.empty_like(q)
+    _integrals(np.ascontiguousarray(x, dtype=float), q, Vq, Mq)
+    return Vq, Mq
+
+
+@jit
+def _integrals(x, q, Vq, Mq):
+    for r in range(q.shape[0]):
+        Vq[r, 0] = Mq[r, 0] = 0.0
+        for j in range(x.size - 1):
+            h = x[j + 1] - x[j]
+            dV = 0.5 * h * (q[r, j] + q[r, j + 1])
+            dM = Vq[r, j] * h + h * h * (q[r, j] / 3.0 + q[r, j + 1] / 6.0)
+            # a running sum's first term is the term itself (-0.0 stays -0.0), as numpy's
+            Vq[r, j + 1] = dV if j == 0 else Vq[r, j] + dV
+            Mq[r, j + 1] = dM if j == 0 else Mq[r, j] + dM
 
 
 def seabed_profile(plant, snaps: dict) -> dict:

@@ -266,7 +266,21 @@ def lift_load_case(
 
 
 # ----------------------------------------------------------------------------- statics
-def shear_moment(x, q, point_loads: Sequence = (), keep=None) -> tuple[np.ndarray, np.ndarray]:
+def line_integrals(x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The line load's shear and moment (..., nx) of :func:`shear_moment` (no point loads):
+    V by the trapezoidal rule, M by the exact moment of the piecewise-linear q, each summed
+    from the aft end in grid order."""
+    h = np.diff(x)
+    Vq = np.concatenate(
+        [np.zeros(q.shape[:-1] + (1,)), np.cumsum(0.5 * h * (q[..., :-1] + q[..., 1:]), -1)], -1
+    )
+    dM = Vq[..., :-1] * h + h * h * (q[..., :-1] / 3.0 + q[..., 1:] / 6.0)
+    Mq = np.concatenate([np.zeros(q.shape[:-1] + (1,)), np.cumsum(dM, -1)], -1)
+    return Vq, Mq
+
+
+def shear_moment(x, q, point_loads: Sequence = (), keep=None,
+                 integrate=line_integrals) -> tuple[np.ndarray, np.ndarray]:
     """Shear force and bending moment of a free beam by statics, integrated from the aft end.
 
     x : ndarray (nx,) — non-decreasing grid from 0 to L [m]. A repeated value marks a jump:
@@ -279,6 +293,8 @@ def shear_moment(x, q, point_loads: Sequence = (), keep=None) -> tuple[np.ndarra
     keep : ndarray of int, optional — only these points' values are returned (..., keep.size):
         the same numbers as ``V[..., keep]``, with the point loads added at those points
         alone (a run's strength keeps about one point in five)
+    integrate : callable, optional — ``(x, q) -> (Vq, Mq)``, the line load's part
+        (:func:`line_integrals`, or a compiled equivalent summing in the same order)
     returns : (V, M), each ndarray (..., nx)
         V(x) = integral of q from x[0] to x (trapezoidal, exact for the piecewise-linear
         interpolant of the samples) plus the point loads at x_i <= x [N];
@@ -296,12 +312,7 @@ def shear_moment(x, q, point_loads: Sequence = (), keep=None) -> tuple[np.ndarra
         raise InputError("x", "decreasing values", "the grid must be non-decreasing [m]")
     if q.ndim < 1 or q.shape[-1] != x.size:
         raise InputError("q", f"shape {q.shape}", f"last dimension must match x ({x.size})")
-    h = np.diff(x)
-    Vq = np.concatenate(
-        [np.zeros(q.shape[:-1] + (1,)), np.cumsum(0.5 * h * (q[..., :-1] + q[..., 1:]), -1)], -1
-    )
-    dM = Vq[..., :-1] * h + h * h * (q[..., :-1] / 3.0 + q[..., 1:] / 6.0)
-    Mq = np.concatenate([np.zeros(q.shape[:-1] + (1,)), np.cumsum(dM, -1)], -1)
+    Vq, Mq = integrate(x, q)
     pts = [(float(xi), np.asarray(F, dtype=float)) for xi, F in point_loads]
     lead = np.broadcast_shapes(q.shape[:-1], *(F.shape for _, F in pts))
     idx = np.arange(x.size)

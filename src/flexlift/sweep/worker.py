@@ -137,7 +137,7 @@ def run_case(task: Task) -> tuple[dict, dict]:
             raise CaseError(task.index, None, traceback.format_exc()) from None
         for mode in task.controls:
             try:
-                res, ds = _one_mode(scenario, mode, task.stop_beyond)
+                res, ds = _one_mode(scenario, mode, task.stop_beyond, not task.histories)
             except Exception:
                 raise CaseError(task.index, mode, traceback.format_exc()) from None
             record["results"][mode] = res
@@ -174,13 +174,16 @@ def _size(scenario) -> str:
             f"{sim.time_step_s:g} s, {sim.retained_flexible_modes} retained flexible modes")
 
 
-def _one_mode(scenario, mode: str, stop_beyond: bool = False) -> tuple[dict, object]:
+def _one_mode(scenario, mode: str, stop_beyond: bool = False,
+              summary_only: bool = False) -> tuple[dict, object]:
+    """One control mode's ascent of a case: (its result's digest, its dataset; a plain
+    :class:`~flexlift.ascent.result.Frame` when ``summary_only``, for ``keep: summary``)."""
     from flexlift.ascent import simulate
     from flexlift.sweep.plants import plant_for
 
     try:
         result = simulate(scenario, control=mode, plant=plant_for(scenario, mode),
-                          stop_beyond=stop_beyond)
+                          stop_beyond=stop_beyond, summary_only=summary_only)
     except SimulationError as exc:
         partial = exc.partial
         return _failed(clean(str(exc), 300), partial), getattr(partial, "dataset", None)
@@ -211,6 +214,7 @@ def _arrival(result) -> float | None:
     import numpy as np
 
     arr = getattr(result.dataset, "arrival_time", None)
-    if arr is None or arr.size == 0 or not np.all(np.isfinite(arr.values)):
+    values = None if arr is None else np.asarray(arr.values)
+    if values is None or values.size == 0 or not np.all(np.isfinite(values)):
         return None
-    return round(float(np.max(arr.values)), 3)
+    return round(float(np.max(values)), 3)
