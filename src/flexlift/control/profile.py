@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexlift._jit import jit
 from flexlift.physics.gas import ambient_pressure, expansion_rate, purge_flow
 
 #: height samples of the forward-backward pass and time samples of the table
@@ -46,21 +47,27 @@ def speed_limit(z, V, capacity, purge_max, eta, water_depth, p_atm, rho_g):
     return q / expansion_rate(V, p, rho_g, 1.0)
 
 
-def _passes(v: list, step: float) -> list:
+@jit
+def _passes(v, step):
     """The forward (accelerating from rest) and backward (decelerating to rest) passes over
-    the speed caps ``v`` [m/s] (a list, changed in place), ``step`` = 2 a dz [m^2/s^2]: on
-    Python floats (the same operations as on numpy's scalars: libm's pow for the square, the
-    correctly rounded sqrt; a few times faster)."""
-    n = len(v)
+    the speed caps ``v`` [m/s] (an array, changed in place), ``step`` = 2 a dz [m^2/s^2],
+    compiled: each speed sqrt(v_prev^2 + step) with the square the correctly rounded product
+    (libm's pow, which the interpreted passes used, is one unit in the last place off in
+    about 3 of 10,000 squares) and the correctly rounded sqrt."""
+    n = v.size
     v[0] = 0.0
     prev = 0.0
     for i in range(1, n):  # accelerating from rest
-        s = math.sqrt(prev ** 2 + step)
-        prev = v[i] = v[i] if not s < v[i] else s
-    v[-1] = prev = 0.0
+        s = math.sqrt(prev * prev + step)
+        if s < v[i]:
+            v[i] = s
+        prev = v[i]
+    v[n - 1] = prev = 0.0
     for i in range(n - 2, -1, -1):  # decelerating to rest at the target
-        s = math.sqrt(prev ** 2 + step)
-        prev = v[i] = v[i] if not s < v[i] else s
+        s = math.sqrt(prev * prev + step)
+        if s < v[i]:
+            v[i] = s
+        prev = v[i]
     return v
 
 
@@ -78,7 +85,7 @@ def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth
         return None
     cap = np.minimum(lim, speed)
     dz = z[1] - z[0]
-    v = np.array(_passes(cap.tolist(), float(2.0 * accel * dz)))
+    v = _passes(np.array(cap, dtype=float), float(2.0 * accel * dz))
     tau = np.concatenate([[0.0], np.cumsum(2.0 * dz / np.maximum(v[1:] + v[:-1], 1e-12))])
     t = np.linspace(0.0, tau[-1], TIMES)
     binding = z[lim < speed]
