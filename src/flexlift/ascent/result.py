@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
 from flexlift import constants as C
 from flexlift.ascent.amplification import amplification, largest
@@ -31,6 +31,9 @@ from flexlift.ascent.state import (
     EV_SURFACE_BREACH,
     EV_TARGET_HELD,
 )
+
+if TYPE_CHECKING:  # xarray is imported where a Dataset is built: a sweep's worker that
+    import xarray as xr  # records summaries never loads it (nor pandas)
 
 #: the bag variables of a recorded row, in the order the compiled loop writes them
 BAG_VARS = {
@@ -280,7 +283,12 @@ def build_result(run, error: str | None, summary_only: bool = False) -> Result:
     for name, long in DAF_VARS.items():
         data[name] = (("bag",), daf[name], {"units": "1" if name.startswith("daf") else "N",
                                              "long_name": long})
-    ds = Frame(data, coords) if summary_only else xr.Dataset(data, coords=coords)
+    if summary_only:
+        ds = Frame(data, coords)
+    else:
+        import xarray as xr
+
+        ds = xr.Dataset(data, coords=coords)
     _attributes(ds, run, events, t, Mmax, Vmax, error)
     return Result(ds)
 

@@ -104,10 +104,14 @@ def local_cores() -> int:
 
 
 def _init_worker(alive) -> None:
-    """In each local worker: Ctrl-C is the coordinator's to handle; warnings go to the case's
+    """In each local worker: a process of flexlift's own (:func:`~flexlift.sweep.worker.
+    own_process`); Ctrl-C is the coordinator's to handle; warnings go to the case's
     record, not to a stray handler; and the worker ends when the coordinating process is gone
     (killed outright, nothing would collect its results): ``alive`` is the reading end of a
     pipe only the coordinator can write to, which reads as ended once it has died."""
+    from flexlift.sweep.worker import own_process
+
+    own_process()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     threading.Thread(target=_watch, args=(alive,), name="flexlift-watch", daemon=True).start()
     root = logging.getLogger("flexlift")

@@ -6,9 +6,9 @@ on a busy machine) is paid once per sweep instead of once per worker and per new
 pool is renewed after a worker dies). A failure here only means each worker loads the code
 itself on its first case.
 
-The server's xarray is also told that Dask is not about (:func:`flexlift.sweep.nodask.
-forget_dask`): with Dask installed, xarray otherwise imports ``dask`` and ``dask.array`` at its
-first Dataset only to ask whether each array is a Dask array (0.1-0.5 s of the warm-up).
+The warm-up's runs record summaries only (no xarray Dataset), so the server never imports
+xarray or pandas (0.4 s): a worker whose sweep keeps summaries never needs them; one that keeps
+histories imports xarray at its first Dataset (:func:`flexlift.sweep.worker.own_process`).
 
 Last, the server's objects are frozen (:func:`gc.freeze`): the workers forked from it never
 scan them in their own garbage collections, nor write to their pages.
@@ -27,12 +27,10 @@ def warm_up() -> bool:
     try:
         from flexlift.ascent import simulate
         from flexlift.scenario import load_scenario
-        from flexlift.sweep.nodask import forget_dask
 
-        forget_dask()
         tanker = load_scenario("tanker")
         for mode in ("coordinated", "paper"):
-            simulate(tanker, control=mode, duration=1.0)
+            simulate(tanker, control=mode, duration=1.0, summary_only=True)
     except Exception:  # never stop a sweep for this: the workers load the code themselves
         log.debug("warm-up failed", exc_info=True)
         return False

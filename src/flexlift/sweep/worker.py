@@ -102,6 +102,25 @@ class OutsideCases(logging.Filter):
         return not getattr(_state, "in_case", False)
 
 
+_own = {"process": False, "forgot_dask": False}
+
+
+def own_process() -> None:
+    """Called in each worker process flexlift starts for itself (the local pool's
+    initializer): before its first xarray Dataset (a sweep keeping histories), xarray is told
+    that Dask is not about (:func:`flexlift.sweep.nodask.forget_dask`; with Dask installed it
+    would import it to ask); never done in the user's own process (``--workers 1``)."""
+    _own["process"] = True
+
+
+def _before_dataset() -> None:
+    if _own["process"] and not _own["forgot_dask"]:
+        from flexlift.sweep.nodask import forget_dask
+
+        _own["forgot_dask"] = True
+        forget_dask()
+
+
 def _quiet_child() -> None:
     """In a worker process nobody configured (a Dask worker), flexlift's warnings would reach
     Python's last-resort handler and the terminal: they belong to the case's record only."""
@@ -181,6 +200,8 @@ def _one_mode(scenario, mode: str, stop_beyond: bool = False,
     from flexlift.ascent import simulate
     from flexlift.sweep.plants import plant_for
 
+    if not summary_only:
+        _before_dataset()
     try:
         result = simulate(scenario, control=mode, plant=plant_for(scenario, mode),
                           stop_beyond=stop_beyond, summary_only=summary_only)
