@@ -261,15 +261,24 @@ def _wait_for_a_figure(tmp_path: Path, proc: subprocess.Popen) -> None:
 def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, figure_processes,
                                                                tmp_path):
     """Killed while it draws (in the main process, or with two figure processes: none of
-    them is left behind holding the run's output pipe, or writing into its folder)."""
+    them is left behind holding the run's output pipe, or writing into its folder). A run
+    that finished its last figure and swapped its folder in before the signal arrived (the
+    signal follows the first figure by up to one poll; a fast run on a loaded machine can
+    beat it) tested nothing: it is run again, at most twice."""
     out = tmp_path / "o"
-    with output_folder(out, "run") as tmp:
-        _write(tmp / "previous.txt", "v1")
-    proc = _start(out, tmp_path, figure_processes)
-    _wait_for_partial(tmp_path, "o", proc)
-    _wait_for_a_figure(tmp_path, proc)
-    proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
+    for attempt in range(3):
+        with output_folder(out, "run") as tmp:
+            _write(tmp / "previous.txt", "v1")
+        proc = _start(out, tmp_path, figure_processes)
+        _wait_for_partial(tmp_path, "o", proc)
+        _wait_for_a_figure(tmp_path, proc)
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+        finished = not (out / "previous.txt").exists() and (out / "report.html").is_file()
+        if not finished:
+            break
+    else:
+        pytest.fail("the run finished before its signal three times: nothing was tested")
     assert (out / "previous.txt").read_text() == "v1"
     if sig == signal.SIGTERM:  # cleaned up at once, and said so on one line
         assert proc.returncode == 143 and "terminated" in err and "Traceback" not in err

@@ -156,6 +156,8 @@ def inline_jit(fn):
     reference on every array it passes, a few ns each; for a function of a few dozen
     operations taking several of the loop's arrays that was most of its cost (a bag's
     motion, two 7 x 5 products: 185 ns called, 55 ns inlined). Called from Python, it is
-    an ordinary compiled function. Not for large functions (each caller compiles its own
-    copy) or ones called from many places."""
+    an ordinary compiled function. Also for a large function with one compiled caller (the
+    step's parts: each call took a reference on each of its structs). Not for a large
+    function called from several places: each caller compiles its own copy (inlining the
+    strip loads and the implicit step too made the first compile twice as long, for nothing)."""
     return jit(fn, inline="always")

@@ -141,7 +141,7 @@ def new_state(nc: int) -> ControlState:
                         np.zeros(nc, dtype=np.bool_))
 
 
-@jit
+@inline_jit
 def observe(t, z, zd, separated, controllers, control_state):
     """Filter the measurements, note separations, form the reference and the supervisor's
     inputs (into ``control_state``: ``e_in``, ``r_in``, ``z_ref``). ``z``, ``zd`` (nc,)
@@ -196,7 +196,7 @@ def reference(tau, distance, controllers):
             k * linear(controllers.ref_v, 0.0, controllers.ref_T, tau))
 
 
-@jit
+@inline_jit
 def _note_separations(t, separated, controllers, control_state):
     """Start the reference of every bag whose hold has let go and whose start time has come."""
     new = False
@@ -232,7 +232,7 @@ def _note_separations(t, separated, controllers, control_state):
                 control_state.z0[i] = control_state.z_f[i]
 
 
-@jit
+@inline_jit
 def supervise(controllers, control_state):
     """The supervisor's output from the lookup table, into ``control_state.u`` (0 before
     separation)."""
@@ -244,7 +244,7 @@ def supervise(controllers, control_state):
                                           control_state.e_in[i], control_state.r_in[i])
 
 
-@jit
+@inline_jit
 def act(V, controllers, control_state):
     """Desired volumes, fill and purge commands from ``control_state.u`` and the measured
     volumes ``V`` (nc,) [m^3], into ``control_state``: ``V_d``, ``fill`` [m^3/s] and
@@ -297,7 +297,7 @@ def _purge(i, excess, controllers, control_state):
     return min(max(raw, 0.0), 1.0) if on else 0.0
 
 
-@jit
+@inline_jit
 def _level(controllers, control_state):
     """Coordinated mode: the pitch-levelling correction of every desired volume (staged: of
     the bags under way, on their height errors); each bag weighted by the bags it stands for."""
