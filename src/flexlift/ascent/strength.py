@@ -159,7 +159,9 @@ def seabed_loads(plant, snaps: dict) -> np.ndarray:
     """Line loads [N/m] (nt, ns) of the seabed at the loop's strips in every snapshot: the
     contact (tension-capable where the strip's group is held) and the released suction."""
     w, v = snaps["q"] @ plant.strips.shape.T, snaps["v"] @ plant.strips.shape.T
-    held = ~snaps["sep"][:, plant.strips.group]
+    # C order always: numpy's layout of the indexed array varies with its shape, and each
+    # layout is another compile of the law (1 s, in a sweep's worker mid-sweep)
+    held = np.ascontiguousarray(~snaps["sep"][:, plant.strips.group])
     q = seabed.contact_load(w, v, plant.strips.contact_k, plant.strips.contact_c, held)
     return q - np.where(held, 0.0, snaps["H"][:, plant.strips.group] * plant.strips.hold)
 
