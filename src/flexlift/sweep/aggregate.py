@@ -272,7 +272,8 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict):
             "attempts": ("case", np.array([r.get("attempts", 0) if r else 0 for r in recs], dtype=np.int32)),
             "elapsed_s": ("case", np.array([np.nan if not r or r.get("elapsed_s") is None else r["elapsed_s"]
                                             for r in recs]), {"units": "s"})}
-    crit = list(dict.fromkeys(c for m in modes for c in criteria_names(records, m)))
+    by_mode = {m: criteria_names(records, m) for m in modes}  # once: each reads every record
+    crit = list(dict.fromkeys(c for m in modes for c in by_mode[m]))
     head = list(dict.fromkeys(h for m in modes for h in headline_names(records, m)))
     shape = (n, len(modes))
     text = {v: np.full(shape, "", dtype=object) for v in ("mode_status", "outcome", "cause", "error",
@@ -285,7 +286,7 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict):
             if res is None or r["status"] == "lost":
                 text["mode_status"][i, j] = r["status"] if r else "missing"
                 continue
-            names_m = criteria_names(records, m)
+            names_m = by_mode[m]
             failed = failed_criteria(res, names_m)
             text["mode_status"][i, j] = res["status"]
             text["outcome"][i, j] = outcome_of(res)
