@@ -241,6 +241,14 @@ MUTATIONS = (
       "spread = 1.0 + 12.0 * (xs[cell] - mid) * (xe - mid) / wid**2",
       "spread = 1.0 + 0.0 * (xs[cell] - mid) * (xe - mid) / wid**2",
       "the strength spreads each strip's seabed load evenly over its cell (centroid off the strip)"),
+    M("strength-moment-weights", "ascent/strength.py",
+      "dM = Vq[r, j] * h + h * h * (q[r, j] / 3.0 + q[r, j + 1] / 6.0)",
+      "dM = Vq[r, j] * h + h * h * (q[r, j] / 6.0 + q[r, j + 1] / 3.0)",
+      "the compiled strength weights the moment of a linear load's two ends the wrong way"),
+    M("valve-pass-square", "control/profile.py",
+      "s = math.sqrt(prev * prev + step)\n        if s < v[i]:\n            v[i] = s\n        prev = v[i]\n    v[n - 1]",
+      "s = math.sqrt(prev + step)\n        if s < v[i]:\n            v[i] = s\n        prev = v[i]\n    v[n - 1]",
+      "the valve-limited profile accelerates from rest with v, not v^2"),
 )
 
 

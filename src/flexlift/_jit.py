@@ -116,7 +116,7 @@ _FOLDER = None if numba.config.DISABLE_JIT else cache_folder(sources_stamp())
 
 def cache_is_warm(entry: str = "kernel.advance") -> bool:
     """Whether the compiled ``entry`` (module.function of the loop) is in this process's cache
-    folder, so that the first call loads it instead of compiling (about 30-60 s); True when
+    folder, so that the first call loads it instead of compiling (about 60-90 s); True when
     nothing is compiled (``NUMBA_DISABLE_JIT``) or nothing can be cached (nothing to say)."""
     if numba.config.DISABLE_JIT or _FOLDER is None:
         return True
@@ -159,5 +159,6 @@ def inline_jit(fn):
     an ordinary compiled function. Also for a large function with one compiled caller (the
     step's parts: each call took a reference on each of its structs). Not for a large
     function called from several places: each caller compiles its own copy (inlining the
-    strip loads and the implicit step too made the first compile twice as long, for nothing)."""
+    strip loads and the implicit step too made the first compile twice as long, for
+    nothing)."""
     return jit(fn, inline="always")

@@ -54,9 +54,10 @@ positional argument:
   part of the step called from one place*: ``@inline_jit`` (:func:`flexlift._jit.
   inline_jit`), compiled into its caller. A call between compiled functions takes a
   reference on every struct it passes (an atomic count each): the step's parts inlined
-  (``step`` itself, ``control``, ``events``, ``finish_step``, the gas step, the rates) took
-  a tanker step from 1.93 to 1.68 µs, the first compile ~20 s longer. A large function
-  called from several places (the strip loads, the implicit step) stays a call.
+  (``control``, ``events``, ``finish_step``, the gas step, the rates) took a tanker step from
+  1.95 to 1.75 µs, the first compile from 70 to 85 s. A large function called from several
+  places (the strip loads, the implicit step) stays a call, and so does ``step`` (inlined
+  into ``_advance`` it made the compile 106 s, for nothing measurable).
 
 Renaming or removing a record's class leaves numba's on-disk cache index naming the old
 class: delete the ``*.nbi``/``*.nbc`` files of ``__pycache__`` after such a change.
@@ -176,7 +177,7 @@ def _advance(plant, controllers, control_state, state, switches, settings, recor
     return RET_DONE
 
 
-@inline_jit
+@jit
 def step(plant, controllers, control_state, state, switches, settings, recorder):
     """One time step (module docstring); returns RET_DONE to go on."""
     k = state.counters[0]
