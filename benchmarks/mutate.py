@@ -38,7 +38,8 @@ ROOT = Path(__file__).resolve().parent.parent
 #: the tests each mutant runs, fastest to fail first (pytest -x stops at the first failure)
 TESTS = ("tests/test_physics.py", "tests/test_controller.py", "tests/test_control_laws.py",
          "tests/test_plant_laws.py", "tests/test_supply.py", "tests/test_results.py",
-         "tests/test_simulate.py", "tests/test_staged_lift.py", "tests/test_bag_types.py")
+         "tests/test_simulate.py", "tests/test_staged_lift.py", "tests/test_bag_types.py",
+         "tests/test_casecost.py")
 
 
 @dataclass(frozen=True)
@@ -263,13 +264,16 @@ class Outcome:
 
 
 def copy_tree(dest: Path) -> None:
-    """src/, tests/ and pyproject.toml (the pytest settings) of the checkout into ``dest``,
-    without compiled or cached files."""
+    """src/, tests/, pyproject.toml (the pytest settings) and the benchmarks' scenario files
+    (some tests run them) of the checkout into ``dest``, without compiled or cached files."""
     skip = shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc", ".pytest_cache",
                                   ".hypothesis", "*.egg-info")
     for name in ("src", "tests"):
         shutil.copytree(ROOT / name, dest / name, ignore=skip)
     shutil.copy2(ROOT / "pyproject.toml", dest / "pyproject.toml")
+    (dest / "benchmarks").mkdir()
+    for scenario in (ROOT / "benchmarks").glob("*.yaml"):
+        shutil.copy2(scenario, dest / "benchmarks" / scenario.name)
 
 
 def apply(mutation: Mutation, dest: Path) -> None:
