@@ -266,7 +266,7 @@ def test_a_killed_run_leaves_the_previous_output_and_no_litter(sig, figure_proce
     signal follows the first figure by up to one poll; a fast run on a loaded machine can
     beat it) tested nothing: it is run again, at most twice."""
     out = tmp_path / "o"
-    for attempt in range(3):
+    for _ in range(3):
         with output_folder(out, "run") as tmp:
             _write(tmp / "previous.txt", "v1")
         proc = _start(out, tmp_path, figure_processes)
