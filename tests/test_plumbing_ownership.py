@@ -94,3 +94,22 @@ def test_the_journal_is_let_go_at_the_end_of_the_run(tmp_path):
         os.fstat(fd)  # held during the run
     with pytest.raises(OSError):
         os.fstat(fd)  # closed after it
+
+
+def test_the_run_that_made_the_journal_never_opens_its_name_again(tmp_path, monkeypatch):
+    """Claims of the creating process go through the descriptor it holds (appended, after
+    an adopted journal's lines), so no planted name can ever be opened by them."""
+    j = Journal(tmp_path).start()
+    other = Journal(tmp_path, j.ident)  # as an adopted journal in another process
+    other.claim("from_the_copy.png")
+    real_open = os.open
+
+    def no_reopen(path, *args, **kwargs):
+        assert Path(path).name != JOURNAL, "the journal's name was opened again"
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", no_reopen)
+    j.claim("a.txt", "b.txt")
+    monkeypatch.undo()
+    assert j.entries() == ["from_the_copy.png", "a.txt", "b.txt"]
+    j.close()

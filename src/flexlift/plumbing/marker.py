@@ -108,7 +108,8 @@ class Journal:
                                       "file, another user's, or not a list of names)")
             if _same_file(os.lstat(self.path), st):
                 os.unlink(self.path)
-        fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW, 0o644)
+        fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND | _NOFOLLOW,
+                     0o644)
         st = os.fstat(fd)
         # held open until close(): while it is, no other file can take its inode number, so
         # the identity a claim checks cannot be met by a file planted after it was removed
@@ -128,7 +129,17 @@ class Journal:
         if not relpaths:
             return
         line = "".join(json.dumps(r) + "\n" for r in relpaths).encode("utf-8")
-        # no O_CREAT: a claim never creates a file (start() made the journal with O_EXCL);
+        if self._fd is not None:
+            # the process that created it appends through its own descriptor, never opening
+            # the name again, and only while the name is still that file
+            st = os.lstat(self.path)
+            if (st.st_dev, st.st_ino) != self.ident or not stat.S_ISREG(st.st_mode):
+                raise FileExistsError(f"{self.path} was replaced during the run; nothing "
+                                      "written to it")
+            os.write(self._fd, line)
+            return
+        # an adopted journal (another process, :func:`adopted`) is opened by name. No O_CREAT:
+        # a claim never creates a file (start() made the journal with O_EXCL);
         # O_NOFOLLOW: never through a link; O_NONBLOCK: a FIFO planted under the name fails
         # here instead of blocking the run; and nothing is written unless the file opened is
         # the one start() created (a hard link or another file in its place is refused)
