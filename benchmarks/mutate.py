@@ -247,9 +247,8 @@ MUTATIONS = (
       "dM = Vq[r, j] * h + h * h * (q[r, j] / 6.0 + q[r, j + 1] / 3.0)",
       "the compiled strength weights the moment of a linear load's two ends the wrong way"),
     M("valve-pass-square", "control/profile.py",
-      "s = math.sqrt(prev * prev + step)\n        if s < v[i]:\n            v[i] = s\n        prev = v[i]\n    v[n - 1]",
-      "s = math.sqrt(prev + step)\n        if s < v[i]:\n            v[i] = s\n        prev = v[i]\n    v[n - 1]",
-      "the valve-limited profile accelerates from rest with v, not v^2"),
+      "s = math.sqrt(prev * prev + step)", "s = math.sqrt(prev + step)",
+      "the valve-limited profile's passes grow the speed with v, not v^2"),
 )
 
 

@@ -55,20 +55,21 @@ def _passes(v, step):
     (libm's pow, which the interpreted passes used, is one unit in the last place off in
     about 3 of 10,000 squares) and the correctly rounded sqrt."""
     n = v.size
-    v[0] = 0.0
-    prev = 0.0
-    for i in range(1, n):  # accelerating from rest
-        s = math.sqrt(prev * prev + step)
-        if s < v[i]:
-            v[i] = s
-        prev = v[i]
-    v[n - 1] = prev = 0.0
-    for i in range(n - 2, -1, -1):  # decelerating to rest at the target
-        s = math.sqrt(prev * prev + step)
-        if s < v[i]:
-            v[i] = s
-        prev = v[i]
+    _pass(v, step, 0, n, 1)  # accelerating from rest
+    _pass(v, step, n - 1, -1, -1)  # decelerating to rest at the target
     return v
+
+
+@jit
+def _pass(v, step, first, stop, by):
+    """One pass of :func:`_passes` from rest at ``v[first]`` over ``range(first, stop, by)``:
+    each speed capped at sqrt(v_previous^2 + step)."""
+    v[first] = prev = 0.0
+    for i in range(first + by, stop, by):
+        s = math.sqrt(prev * prev + step)
+        if s < v[i]:
+            v[i] = s
+        prev = v[i]
 
 
 def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth, p_atm,
