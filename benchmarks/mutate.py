@@ -39,7 +39,7 @@ ROOT = Path(__file__).resolve().parent.parent
 TESTS = ("tests/test_physics.py", "tests/test_controller.py", "tests/test_control_laws.py",
          "tests/test_plant_laws.py", "tests/test_supply.py", "tests/test_results.py",
          "tests/test_simulate.py", "tests/test_staged_lift.py", "tests/test_bag_types.py",
-         "tests/test_casecost.py")
+         "tests/test_casecost.py", "tests/test_step_control.py")
 
 
 @dataclass(frozen=True)
@@ -249,6 +249,19 @@ MUTATIONS = (
     M("valve-pass-square", "control/profile.py",
       "s = math.sqrt(prev * prev + step)", "s = math.sqrt(prev + step)",
       "the valve-limited profile's passes grow the speed with v, not v^2"),
+    # ------------------------------------------------------------- step control (issue 28)
+    M("held-block-in-fill", "ascent/kernel.py",
+      "if (state.fill[i] != 0.0 or state.opening[i] != 0.0 or switches.leak[i] != 0.0",
+      "if (state.opening[i] != 0.0 or switches.leak[i] != 0.0",
+      "held blocks start while a bag is still filling"),
+    M("quiet-step-no-hold", "ascent/kernel.py",
+      "    holding(t, plant, state, switches, settings, recorder, switches.noise[0])",
+      "    pass",
+      "a quiet block's inner steps leave the holding force and separation unstepped"),
+    M("fault-keeps-block", "ascent/loop.py",
+      "self.state.counters[1] &= ~(F_HELD | F_QUIET | F_HAVE_B)",
+      "self.state.counters[1] &= ~F_QUIET",
+      "a fault inside a held block leaves the block's mechanics frozen to its end"),
 )
 
 

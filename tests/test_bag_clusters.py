@@ -123,8 +123,14 @@ def test_the_whole_ascent_shared_passes_with_the_same_events(fifty):
     _same_events(shared, alone)
     assert shared.criteria == alone.criteria and all(shared.criteria.values())
     for key in ("separation_time_s", "breakout_time_s", "max_ascent_velocity_ms",
-                "max_pitch_deg", "max_bending_moment_MNm", "end_time_s"):
+                "max_pitch_deg", "end_time_s"):
         assert shared.headline[key] == pytest.approx(alone.headline[key], rel=1e-3), key
+    # the hold at the target is chaotic (73 bags' deadbands): rounding-level differences at
+    # separation (~1e-11) grow to ~0.3 % of the moment at the hold's end, where the alone
+    # run's peak (3.395 MN m at 4,050 s) passed the fill's (3.387 MN m at 60 s) that the
+    # shared run keeps: the peak has that precision
+    key = "max_bending_moment_MNm"
+    assert shared.headline[key] == pytest.approx(alone.headline[key], rel=5e-3), key
 
 
 def test_a_fault_on_one_member_splits_it_from_its_cluster(fifty):

@@ -1,7 +1,10 @@
-"""Step control while every holding group is held (kernel.held_block): the same ascent as
-every step alike, on the tanker, the pipeline and an own hull (the trawler of tests/data):
-the criteria identical, the events at the same times within one base step, the headline
-peaks within 1e-3 relative, the recorded rows at their times."""
+"""Step control where nothing moves (kernel.held_block, kernel.quiet_step: the pull, every
+group held and no bag filling or purging): the same ascent as every step alike, on the tanker
+in both control modes, the pipeline and an own hull (the trawler of tests/data): the criteria
+identical, the events at the same times within one base step, the headline peaks within 1e-3
+relative (they agree to ~1e-5 and better), the recorded rows at their times; the fill itself
+in base steps, bit for bit the run without step control; a fault in the pull ends the
+quiet."""
 
 from pathlib import Path
 
@@ -15,6 +18,8 @@ from flexlift.scenario import load_scenario
 
 TRAWLER = Path(__file__).parent / "data" / "trawler.yaml"
 CASES = {"tanker": lambda: load_scenario("tanker"),
+         "tanker coordinated": lambda: load_scenario("tanker").with_changes(
+             **{"control.mode": "coordinated"}),
          "pipeline": lambda: load_scenario("pipeline"),
          "trawler": lambda: load_scenario(TRAWLER)}
 
@@ -91,22 +96,76 @@ def test_a_held_block_divides_the_row_interval(dt, k_out, m):
     assert k_out % got == 0 and (got == 1 or got * dt <= HELD_STEP_S + 1e-9)
 
 
-def test_blocks_end_before_the_uplift_nears_the_hold():
-    """Held blocks run early in the fill and have ended, with base steps, before the step of
-    the separation (the uplift within the margin of the hold)."""
+def _run_to(sc, plant, k):
     from flexlift.ascent import kernel
     from flexlift.ascent.loop import Ascent
+
+    run = Ascent(sc, plant, "coordinated", 3000.0, "table")
+    run._room(k)
+    kernel.advance(run.inputs(), k)
+    return run
+
+
+def test_blocks_run_in_the_quiet_pull_only():
+    """No block while the bags fill (the step after the last fill command is still a base
+    step); blocks, quiet, in the pull; base steps again before the step of the separation (the
+    uplift within the margin of the hold)."""
     from flexlift.ascent.plant import coupled_plant
-    from flexlift.ascent.state import F_HELD
+    from flexlift.ascent.state import F_HELD, F_QUIET
 
     sc = load_scenario("tanker")
     plant = coupled_plant(sc)
-    t_sep = next(e["time_s"] for e in simulate(sc, plant=plant).events
-                 if e["kind"] == "separation")
+    ref = simulate(sc, plant=plant, control="coordinated")
+    t_sep = next(e["time_s"] for e in ref.events if e["kind"] == "separation")
+    ds = ref.dataset
+    filling = ds.time.values[(np.nan_to_num(ds.fill_rate.values) > 0).any(axis=1)
+                             & (ds.time.values < t_sep)]
     dt = sc.simulation.time_step_s
-    for k, held in ((1005, True), (int(t_sep / dt) - 1, False)):
-        run = Ascent(sc, plant, "coordinated", 3000.0, "table")
-        run._room(k)
-        kernel.advance(run.inputs(), k)
-        assert bool(run.state.counters[1] & F_HELD) is held, k
+    last_fill = int(round(filling.max() / dt))
+    for k, held in ((last_fill, False), (10005, True), (int(t_sep / dt) - 1, False)):
+        run = _run_to(sc, plant, k)
+        flags = run.state.counters[1]
+        assert bool(flags & F_HELD) is held, k
+        assert bool(flags & F_QUIET) is held, k
         assert not run.state.sep.any()
+        if not held and k == last_fill:
+            assert run.state.fill.any()  # still filling: base steps
+
+
+def test_the_fill_is_the_run_without_step_control_bit_for_bit():
+    """Until the first block (the fill, to its end) the two runs are the same numbers."""
+    sc = load_scenario("tanker")
+    a, b = (simulate(sc, control="coordinated", step_control=s, duration=150.0)
+            for s in (False, True))
+    ta = a.dataset.time.values
+    fill = (np.nan_to_num(a.dataset.fill_rate.values) > 0).any(axis=1)
+    upto = ta <= ta[fill].max()  # the run ends before separation: the fill's rows
+    assert 50.0 < ta[fill].max() < 140.0
+    for name in ("height", "gas_volume", "fill_rate", "contact_force"):
+        np.testing.assert_array_equal(a.dataset[name].values[upto], b.dataset[name].values[upto],
+                                      err_msg=name)
+
+
+@pytest.mark.parametrize("fault", [
+    {"kind": "sensor_drift", "bag": "bag_1", "time_s": 500.0, "rate_m_s": 0.001},
+    {"kind": "bag_rupture", "bag": "bag_1", "time_s": 500.05, "leak_time_s": 200.0}])
+def test_a_fault_in_the_quiet_pull_ends_the_quiet(fault):
+    """A fault inside a held block (the rupture between a block's steps) ends it: the steps
+    from the fault on are base steps, the run as every step alike to 1e-6 (of a metre, a cubic
+    metre, the largest contact force)."""
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.ascent.state import F_HELD, F_QUIET
+
+    sc = load_scenario("tanker").with_changes(faults=[fault])
+    plant = coupled_plant(sc)
+    run = _run_to(sc, plant, 5003)
+    assert run.state.counters[1] & F_QUIET and run.state.counters[1] & F_HELD
+    run._fault(sc.faults[0], 5003 * 0.1)
+    assert not run.state.counters[1] & (F_QUIET | F_HELD)
+    a, b = (simulate(sc, plant=plant, control="coordinated", step_control=s, duration=1500.0)
+            for s in (False, True))
+    assert [(e["kind"], e["bag"]) for e in a.events] == [(e["kind"], e["bag"]) for e in b.events]
+    for name in ("height", "gas_volume", "contact_force"):
+        ref = a.dataset[name].values
+        np.testing.assert_allclose(b.dataset[name].values, ref, rtol=1e-6,
+                                   atol=1e-6 * max(np.abs(ref).max(), 1.0), err_msg=name)

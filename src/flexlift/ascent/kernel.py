@@ -16,6 +16,10 @@ Each step k (t = k dt), in order:
    rate by Adams-Bashforth 2; released: exactly), separation located inside the step and seen
    by the next control sample, breakout.
 
+Step control (:func:`held_block`): where nothing moves (the pull: every group held, no bag
+filling or purging), a block's first step runs as above with the mechanics taken over the
+whole block, and its other steps step only the hold and its separation (:func:`quiet_step`).
+
 Faults and noise chunks are set between calls by :mod:`flexlift.ascent.loop`.
 
 **Inputs.** :func:`advance` takes one :class:`~flexlift.ascent.records.LoopInputs` and turns
@@ -109,6 +113,7 @@ from flexlift.ascent.state import (
     F_LIMIT_V,
     F_MATRIX,
     F_OBSERVED,
+    F_QUIET,
     F_RESETTLE,
     RET_DONE,
     RET_NEED_U,
@@ -182,6 +187,9 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
     """One time step (module docstring); returns RET_DONE to go on."""
     k = state.counters[0]
     t = k * settings.dt
+    if (state.counters[1] & F_QUIET and k % settings.held_steps != 0
+            and k % settings.k_str != 0 and k != settings.n_steps):
+        return quiet_step(t, k, plant, state, switches, settings, recorder)
     if not state.counters[1] & F_FRESH:  # the bags' motion and gas of this state, once
         bag_motion(plant, state.q, state.v, state.z, state.zd)
         bag_gas(plant, state.n, state.z, state.p, state.V)
@@ -192,7 +200,11 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
     noise = switches.noise[k - switches.chunk[0]] if switches.chunk[0] >= 0 else switches.noise[0]
     cur = switches.current[0]
     bag_forces(plant, state.V, state.zd, switches.attached, cur, state.point)
-    held = held_block(k, plant, state, switches, settings)
+    held = held_block(t, k, plant, controllers, control_state, state, switches, settings)
+    if held > 0:
+        state.counters[1] |= F_QUIET
+    elif held < 0:
+        state.counters[1] &= ~F_QUIET
     if held != 0 or k % settings.k_out == 0 or k % settings.k_str == 0:
         w_min = strip_loads(plant, state.q, state.v, state.H, state.sep, cur, noise, state.w,
                             state.wv, state.line, state.contact, state.active)
@@ -225,24 +237,30 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
 
 
 @inline_jit
-def held_block(k, plant, state, switches, settings):
-    """Step control while every holding group is held (the fill and the pull): the structure
-    sits on its bilateral seabed springs and barely moves, so its mechanics advance once every
-    ``settings.held_steps`` base steps (a block: one step of the block's length taken at its
-    first step, :func:`held_mechanics`), while the gas, the control samples, the holding force and
-    separation stay on every base step. Returns the block's length in base steps at a block's
-    first step, 0 at its other steps (no mechanics), -1 for a base step. A block starts only
-    on a multiple of ``held_steps`` (the recorded rows' steps, when it divides ``k_out``)
-    with no group separated, no force noise and every group's uplift below its hold by more
-    than ``settings.held_margin`` H_0; a separation inside a block ends it. Switching between
-    blocks and base steps restarts the force extrapolation (the step length changes)."""
+def held_block(t, k, plant, controllers, control_state, state, switches, settings):
+    """Step control where nothing moves: the pull, every holding group held and the bags
+    neither filling nor purging, while the hold decays to separation (about half of the
+    tanker's simulated time). The structure sits on its bilateral seabed springs, so its
+    mechanics advance once every ``settings.held_steps`` base steps (a block: one step of the
+    block's length taken at its first step, :func:`held_mechanics`); the block's other steps
+    change nothing but the hold (:func:`quiet_step`: the holding force and separation stay on
+    every base step, so separation is still located inside its step). Returns the block's
+    length in base steps at a block's first step, 0 at its other steps, -1 for a base step.
+    A block starts only on a multiple of ``held_steps`` (the recorded rows' steps, when it
+    divides ``k_out``) with no group separated, no force noise, the block quiet
+    (:func:`quiet_block`) and every group's uplift below its hold by more than
+    ``settings.held_margin`` H_0; a separation inside a block ends it. The fill runs in base
+    steps: when a bag stops filling decides the gas of the whole lift, and a block would move
+    it. Switching between blocks and base steps restarts the force extrapolation (the step
+    length changes)."""
     m = settings.held_steps
     flags = state.counters[1]
     if m <= 1:
         return -1
     if flags & F_HELD and k % m != 0 and not state.sep.any():
         return 0
-    start = k % m == 0 and switches.chunk[0] < 0 and not state.sep.any()
+    start = (k % m == 0 and switches.chunk[0] < 0 and not state.sep.any()
+             and quiet_block(t, m, plant, controllers, control_state, state, switches, settings))
     if start:
         for g in range(plant.seabed.ng):
             gap = group_uplift(plant, state.V, switches.attached, g) - state.H[g]
@@ -252,6 +270,55 @@ def held_block(k, plant, state, switches, settings):
     if start != bool(flags & F_HELD):
         state.counters[1] = (flags ^ F_HELD) & ~F_HAVE_B
     return m if start else -1
+
+
+@inline_jit
+def quiet_block(t, m, plant, controllers, control_state, state, switches, settings):
+    """Whether a held block of ``m`` base steps may start now (:func:`held_block`): after this
+    step's control sample no bag fills or purges, none leaks, no purge controller has an
+    integral that could open its valve, no staged bag starts within the block, and the
+    sensors have no noise, drift or freeze. Then nothing but the hold changes over the
+    block's inner steps (its mechanics taken at its first step, the bags' heights, pressures
+    and gas stay put); the commands of this sample are held over the block (the control
+    sampled once per block: at this fixed point its samples repeat). A spill or relief vent at
+    the first step's end (:func:`finish_step`) or a fault (:meth:`flexlift.ascent.loop.
+    Ascent._fault`) sends the block's other steps through the whole step (``F_QUIET``
+    cleared)."""
+    if switches.chunk[1] >= 0:  # measurement noise: every sample differs
+        return False
+    for i in range(plant.bags.nb):
+        if (state.fill[i] != 0.0 or state.opening[i] != 0.0 or switches.leak[i] != 0.0
+                or switches.drift[i] != 0.0 or switches.frozen[i]):
+            return False
+    t_end = t + m * settings.dt
+    for j in range(controllers.bags.size):
+        if control_state.integ[j] > 0.0:
+            return False
+        if not control_state.started[j] and controllers.start[j] - 1e-9 <= t_end:
+            return False
+    return True
+
+
+@inline_jit
+def quiet_step(t, k, plant, state, switches, settings, recorder):
+    """An inner step of a quiet held block (:func:`quiet_block`): the events of the state, the
+    rates at the step's start, the holding force and separation (:func:`holding`); nothing
+    else moves. A separation ends the quiet (its step redone as every separation is)."""
+    # no group is separated: events reads no clearance (w_min) before one is
+    if events(t, plant, state, switches, settings, recorder, 0.0) != RET_DONE:
+        return RET_STOP
+    rates(plant, state, switches)
+    state.z_prev[:] = state.z
+    state.work[4] = state.q
+    state.work[5] = state.v
+    holding(t, plant, state, switches, settings, recorder, switches.noise[0])
+    if state.sep.any():
+        state.counters[1] &= ~F_QUIET
+    state.counters[0] = k + 1
+    if k % 100 == 0 and not healthy(state):
+        log_event(recorder, t + settings.dt, EV_NUMERICS, -1, 0.0)
+        return RET_STOP
+    return RET_DONE
 
 
 @inline_jit
@@ -568,6 +635,7 @@ def finish_step(t, plant, state, switches, settings, recorder, noise):
         out = vented_moles(n, p, plant.bags.capacity[i], plant.bags.relief[i], plant.bags.RT)
         out += tipped_spill(plant, i, n - out, p, state.z[i])  # an open bag tipped at the surface
         if out > 0.0:
+            state.counters[1] &= ~F_QUIET  # a held block venting is not quiet
             n -= out
             state.vented[i] += out * plant.bags.RT / p
             state.vented_free[i] += out * plant.bags.RT / plant.bags.p_atm
@@ -575,6 +643,14 @@ def finish_step(t, plant, state, switches, settings, recorder, noise):
         state.V[i] = lifting_volume(plant, i, gas_volume(n, p, plant.bags.RT,
                                                          plant.bags.capacity[i]), state.z[i])
     state.counters[1] |= F_FRESH
+    holding(t, plant, state, switches, settings, recorder, noise)
+
+
+@inline_jit
+def holding(t, plant, state, switches, settings, recorder, noise):
+    """The holding force at the end of the step (held: Adams-Bashforth 2 on its rate; released:
+    exactly), separation located inside the step, and breakout."""
+    dt = settings.dt
     for g in range(plant.seabed.ng):
         if state.sep[g]:
             state.H[g] = released_holding(state.H[g], dt, plant.seabed.release_time)

@@ -34,6 +34,9 @@ from flexlift.ascent.records import LoopInputs
 from flexlift.ascent.result import HULL_VARS, Result, build_result
 from flexlift.ascent.state import (
     EV_NUMERICS,
+    F_HAVE_B,
+    F_HELD,
+    F_QUIET,
     RET_NEED_U,
     RET_STOP,
     Settings,
@@ -88,9 +91,11 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
         :mod:`flexlift.ascent.clusters`); False: the loop keeps every bag on its own (the same
         results, to rounding).
     step_control : bool, optional
-        While every holding group is held, advance the mechanics in steps of up to
-        ``HELD_STEP_S`` (:func:`held_steps`; the gas, control, holding force and separation
-        stay on every time step); False: every step alike (default True).
+        Where nothing moves (every holding group held, no bag filling or purging: the pull),
+        take the time in blocks of up to ``HELD_STEP_S`` (:func:`held_steps`): the mechanics
+        one step per block, the control sampled at its first step, the holding force and
+        separation on every time step (:func:`flexlift.ascent.kernel.held_block`); False:
+        every step alike (default True).
     stop_beyond : bool, optional
         End the run at the first chunk of the loop whose recorded pitch or strength
         snapshots' slope passes ``limits.slope_validity_deg`` (:meth:`Ascent.beyond`): what
@@ -160,7 +165,7 @@ class Ascent:
     :mod:`flexlift.ascent.clusters`): ``records`` are the plant's records as the loop reads
     them, ``clusters`` which bags share; during the run the state, switches and record hold
     one entry per loop bag, and once it ends one per bag of the plant. ``step_control``
-    (default True): while every holding group is held, the mechanics advance in blocks of
+    (default True): where nothing moves (the pull), the time is taken in blocks of
     :func:`held_steps` base steps (:func:`flexlift.ascent.kernel.held_block`)."""
 
     def __init__(self, scenario, plant: Plant, mode: str, T_end: float, engine,
@@ -312,6 +317,10 @@ class Ascent:
         names = [self.plant.names[i] for i in self.clusters.first]  # a faulted bag: its own
         detail = apply_fault(fault, t, names, self.switches,
                              self.controllers.bags, self.control_state)
+        # a held block ends here (kernel.held_block): the steps after a fault are base steps
+        # (the held structure's mechanics, taken to the block's end at its first step, barely
+        # moved; the force extrapolation restarts)
+        self.state.counters[1] &= ~(F_HELD | F_QUIET | F_HAVE_B)
         self.fault_events.append((t, fault.kind, fault.bag, detail))
 
     def _per_bag(self) -> None:

@@ -126,6 +126,8 @@ F_HAVE_B, F_MATRIX, F_LIFTOFF, F_RESETTLE, F_OBSERVED, F_LIMIT_V, F_LIMIT_P, F_F
     1, 2, 4, 8, 16, 32, 64, 128, 256)
 #: flag: the step is inside a held block of step control (its mechanics already advanced)
 F_HELD = 512
+#: flag: the held block's other steps step the hold only (kernel.quiet_step)
+F_QUIET = 1024
 
 
 class Record(NamedTuple):
