@@ -134,8 +134,8 @@ def _main(args: argparse.Namespace) -> int:
     progress = Progress(quiet=args.quiet)
     if not args.quiet and "simulate" in args.stages and not cache_is_warm():
         progress.note("the ascent loop is compiled first (once after an install or a change "
-                      "to it; about 60-90 s on two cores; `python -m flexlift.cli.warm` does "
-                      "it ahead)")
+                      "to it; about one to two minutes on two cores; `python -m "
+                      "flexlift.cli.warm` does it ahead)")
     t0 = time.perf_counter()
     with output_folder(out, "run") as tmp:  # refuses folders flexlift did not write
         # the speed-ups of the whole process are the command's, not the library's: the heap

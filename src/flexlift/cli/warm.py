@@ -26,7 +26,7 @@ def _notices(done: threading.Event, t0: float, say) -> None:
     if done.wait(FIRST_NOTICE_S):
         return
     say("compiling the ascent loop into numba's on-disk cache (once after an install or a "
-        "change to the compiled code; about 60-90 s on two cores) ...")
+        "change to the compiled code; about one to two minutes on two cores) ...")
     while not done.wait(EVERY_S):
         say(f"  still compiling ({time.monotonic() - t0:.0f} s)")
 
