@@ -19,7 +19,8 @@ and the last case file written), ``fixed_s`` (wall - cases / steady: the start a
 of a sweep: imports, the pool, the numba load, the results), ``case_in_worker_s`` (the mean of
 the cases' own ``elapsed_s``: the case in the loop, as the worker timed it). The load average
 is recorded before and after. ``python benchmarks/bench_sweep.py [--samples 1000]
-[--bags-samples 100] [--no-baseline]``; writes ``benchmarks/sweep.json``.
+[--bags-samples 100] [--no-baseline | --baseline COMMIT] [--out FILE]``; writes
+``benchmarks/sweep.json``.
 """
 
 from __future__ import annotations
@@ -127,12 +128,12 @@ def measure_tree(src: Path, specs: dict, samples: int, work: Path, own: bool) ->
     return out
 
 
-def _baseline_tree(tmp: Path) -> Path | None:
+def _baseline_tree(tmp: Path, commit: str) -> Path | None:
     if shutil.which("git") is None:
         return None
     wt = tmp / "baseline"
     res = subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt),
-                          BASELINE_COMMIT], capture_output=True)
+                          commit], capture_output=True)
     return wt if res.returncode == 0 else None
 
 
@@ -141,6 +142,9 @@ def main(argv=None) -> dict:
     ap.add_argument("--samples", type=int, default=200, help="tanker cases (issue 28: 1000)")
     ap.add_argument("--bags-samples", type=int, default=40, help="73-bag cases")
     ap.add_argument("--no-baseline", action="store_true")
+    ap.add_argument("--baseline", default=BASELINE_COMMIT, metavar="COMMIT",
+                    help=f"the commit compared in the same run (default {BASELINE_COMMIT}, "
+                    "the issue's; e.g. the previous commit, with --out elsewhere)")
     ap.add_argument("--out", default=str(OUT))
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="flexlift-bench-sweep-"))
@@ -154,8 +158,8 @@ def main(argv=None) -> dict:
         t0 = time.perf_counter()
         result["current"] = measure_tree(ROOT / "src", specs, args.samples, tmp, True)
         result["load_mid"] = [round(x, 2) for x in os.getloadavg()]
-        base = None if args.no_baseline else _baseline_tree(tmp)
-        result["baseline_commit"] = BASELINE_COMMIT if base else None
+        base = None if args.no_baseline else _baseline_tree(tmp, args.baseline)
+        result["baseline_commit"] = args.baseline if base else None
         if base is not None:
             result["baseline"] = measure_tree(base / "src", specs, args.samples, tmp, False)
             for k in ("tanker", "bags73"):
