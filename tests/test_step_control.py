@@ -81,19 +81,23 @@ def test_force_noise_keeps_every_step():
                                   b.dataset.contact_force.values)
 
 
-def _settings(dt, k_out):
-    return Settings(dt=dt, n_steps=10, k_ctrl=1, k_out=k_out, k_str=k_out, target=1.0, tol=0.1,
-                    hold_time=1.0, v_limit=1.0, v_down_limit=1.0, pitch_limit=1.0,
+def _settings(dt, k_out, k_ctrl=1):
+    return Settings(dt=dt, n_steps=10, k_ctrl=k_ctrl, k_out=k_out, k_str=k_out, target=1.0,
+                    tol=0.1, hold_time=1.0, v_limit=1.0, v_down_limit=1.0, pitch_limit=1.0,
                     top_limit=np.zeros(1), external=False, held_steps=1, held_margin=0.05)
 
 
-@pytest.mark.parametrize("dt, k_out, m", [(0.1, 10, 10), (0.1, 20, 10), (0.1, 15, 5),
-                                          (0.05, 30, 15), (0.5, 4, 2), (2.0, 5, 1),
-                                          (0.1, 7, 7), (0.1, 1, 1)])
-def test_a_held_block_divides_the_row_interval(dt, k_out, m):
-    got = held_steps(_settings(dt, k_out))
+@pytest.mark.parametrize("dt, k_out, k_ctrl, m", [
+    (0.1, 10, 1, 10), (0.1, 20, 1, 10), (0.1, 15, 1, 5), (0.05, 30, 1, 15), (0.5, 4, 1, 2),
+    (2.0, 5, 1, 1), (0.1, 7, 1, 7), (0.1, 1, 1, 1),
+    (0.1, 10, 3, 1), (0.1, 12, 3, 6), (0.1, 10, 2, 10), (0.1, 10, 5, 10), (0.05, 20, 4, 20)])
+def test_a_held_block_divides_the_row_interval_in_whole_samples(dt, k_out, k_ctrl, m):
+    """A block is a divisor of the row interval, a whole number of control samples (its first
+    step is a sample) and at most HELD_STEP_S long; 1 (off) where none is."""
+    got = held_steps(_settings(dt, k_out, k_ctrl))
     assert got == m
-    assert k_out % got == 0 and (got == 1 or got * dt <= HELD_STEP_S + 1e-9)
+    assert k_out % got == 0 and (got == 1 or (got * dt <= HELD_STEP_S + 1e-9
+                                              and got % k_ctrl == 0))
 
 
 def _run_to(sc, plant, k):
@@ -169,3 +173,54 @@ def test_a_fault_in_the_quiet_pull_ends_the_quiet(fault):
         ref = a.dataset[name].values
         np.testing.assert_allclose(b.dataset[name].values, ref, rtol=1e-6,
                                    atol=1e-6 * max(np.abs(ref).max(), 1.0), err_msg=name)
+
+
+def _ascent(sc, plant, **settings):
+    from flexlift.ascent.loop import Ascent
+
+    run = Ascent(sc, plant, "coordinated", 1950.0, "table")  # to past the lift-off
+    run.settings = run.settings._replace(**settings)
+    return run
+
+
+def test_a_separation_inside_a_block_ends_its_quiet():
+    """A snapshot at every step (each inner step the whole step but its control sample) and
+    blocks up to the hold itself (no margin): the separation falls in a whole step inside a
+    block, which ends the quiet there: the next step moves the structure. The run agrees
+    with every step alike (the criteria, the events within one base step)."""
+    from flexlift.ascent import kernel
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.ascent.state import F_QUIET
+
+    sc = load_scenario("tanker")
+    plant = coupled_plant(sc)
+    res = _ascent(sc, plant, k_str=1, held_margin=-1.0).run(summary_only=True)
+    ref = simulate(sc, plant=plant, control="coordinated", step_control=False, duration=1950.0)
+    assert res.criteria == ref.criteria
+    dt = sc.simulation.time_step_s
+    for a, b in zip(ref.events, res.events):
+        assert (a["kind"], a["bag"]) == (b["kind"], b["bag"])
+        assert abs(a["time_s"] - b["time_s"]) <= dt + 1e-9, (a, b)
+    t_sep = next(e["time_s"] for e in res.events if e["kind"] == "separation")
+    k_sep = int(t_sep / dt)  # the step whose interval holds the separation
+    run = _ascent(sc, plant, k_str=1, held_margin=-1.0)
+    run._room(k_sep + 2)
+    kernel.advance(run.inputs(), k_sep)
+    assert run.state.counters[1] & F_QUIET and not run.state.sep.any()
+    kernel.advance(run.inputs(), k_sep + 1)
+    assert run.state.sep.all() and not run.state.counters[1] & F_QUIET
+    q = run.state.q.copy()
+    kernel.advance(run.inputs(), k_sep + 2)
+    assert not np.array_equal(run.state.q, q)  # the step after the separation moves
+
+
+def test_a_fault_outside_a_block_changes_nothing_else():
+    """Without step control a fault that does nothing (a drift of 0 m/s) leaves the run bit
+    for bit as without it: no block to end, no force extrapolation restarted."""
+    sc = load_scenario("tanker").with_changes(**{"simulation.duration_s": 300.0})
+    drift = sc.with_changes(faults=[{"kind": "sensor_drift", "bag": "bag_1", "time_s": 30.0,
+                                     "rate_m_s": 0.0}])
+    a, b = (simulate(x, control="coordinated", step_control=False) for x in (sc, drift))
+    for name in ("height", "gas_volume", "contact_force"):
+        np.testing.assert_array_equal(a.dataset[name].values, b.dataset[name].values,
+                                      err_msg=name)

@@ -194,8 +194,12 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
         bag_motion(plant, state.q, state.v, state.z, state.zd)
         bag_gas(plant, state.n, state.z, state.p, state.V)
         state.counters[1] |= F_FRESH
-    if k % settings.k_ctrl == 0 and control(t, k, plant, controllers, control_state, state,
-                                            switches, settings) == RET_NEED_U:
+    # the control samples once per quiet block, at its first step (a strength snapshot's
+    # step inside the block runs the whole step but its sample: the commands stay held)
+    sample = k % settings.k_ctrl == 0 and not (state.counters[1] & F_QUIET
+                                               and k % settings.held_steps != 0)
+    if sample and control(t, k, plant, controllers, control_state, state, switches,
+                          settings) == RET_NEED_U:
         return RET_NEED_U
     noise = switches.noise[k - switches.chunk[0]] if switches.chunk[0] >= 0 else switches.noise[0]
     cur = switches.current[0]
@@ -239,7 +243,7 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
 @inline_jit
 def held_block(t, k, plant, controllers, control_state, state, switches, settings):
     """Step control where nothing moves: the pull, every holding group held and the bags
-    neither filling nor purging, while the hold decays to separation (about half of the
+    neither filling nor purging, while the hold decays to separation (about 45 % of the
     tanker's simulated time). The structure sits on its bilateral seabed springs, so its
     mechanics advance once every ``settings.held_steps`` base steps (a block: one step of the
     block's length taken at its first step, :func:`held_mechanics`); the block's other steps
@@ -280,10 +284,10 @@ def quiet_block(t, m, plant, controllers, control_state, state, switches, settin
     sensors have no noise, drift or freeze. Then nothing but the hold changes over the
     block's inner steps (its mechanics taken at its first step, the bags' heights, pressures
     and gas stay put); the commands of this sample are held over the block (the control
-    sampled once per block: at this fixed point its samples repeat). A spill or relief vent at
-    the first step's end (:func:`finish_step`) or a fault (:meth:`flexlift.ascent.loop.
-    Ascent._fault`) sends the block's other steps through the whole step (``F_QUIET``
-    cleared)."""
+    sampled once per block, on measurements that do not change). A spill or relief vent at
+    the first step's end (:func:`finish_step`) or a separation (:func:`separations`) sends the
+    block's other steps through the whole step (``F_QUIET`` cleared); a fault ends the block
+    (:meth:`flexlift.ascent.loop.Ascent._fault`)."""
     if switches.chunk[1] >= 0:  # measurement noise: every sample differs
         return False
     for i in range(plant.bags.nb):
@@ -304,7 +308,8 @@ def quiet_step(t, k, plant, state, switches, settings, recorder):
     """An inner step of a quiet held block (:func:`quiet_block`): the events of the state, the
     rates at the step's start, the holding force and separation (:func:`holding`); nothing
     else moves. A separation ends the quiet (its step redone as every separation is)."""
-    # no group is separated: events reads no clearance (w_min) before one is
+    # no group is separated (a separation ends the quiet, :func:`separations`): events
+    # reads no clearance (w_min) before one is
     if events(t, plant, state, switches, settings, recorder, 0.0) != RET_DONE:
         return RET_STOP
     rates(plant, state, switches)
@@ -312,8 +317,6 @@ def quiet_step(t, k, plant, state, switches, settings, recorder):
     state.work[4] = state.q
     state.work[5] = state.v
     holding(t, plant, state, switches, settings, recorder, switches.noise[0])
-    if state.sep.any():
-        state.counters[1] &= ~F_QUIET
     state.counters[0] = k + 1
     if k % 100 == 0 and not healthy(state):
         log_event(recorder, t + settings.dt, EV_NUMERICS, -1, 0.0)
@@ -733,7 +736,8 @@ def separations(t, plant, state, switches, settings, recorder, noise):
         for _ in range(CONTACT_SUBSTEPS):
             _loads_at_state(plant, state, switches, noise)
             _implicit_step(plant, state, h, state.b)
-    state.counters[1] &= ~F_HAVE_B  # the suction's load steps in: restart the extrapolation
+    # the suction's load steps in: restart the extrapolation; a held block's quiet ends
+    state.counters[1] &= ~(F_HAVE_B | F_QUIET)
     bag_motion(plant, state.q, state.v, state.z, state.zd)
     bag_gas(plant, state.n, state.z, state.p, state.V)
 

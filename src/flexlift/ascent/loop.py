@@ -55,7 +55,7 @@ HULL_PITCH = list(HULL_VARS).index("pitch")
 CHUNK_STEPS = 2000
 #: simulation.duration_s: auto: the record first holds this much of the run [s]
 AUTO_FIRST_S = 10_000.0
-#: step control while every group is held: the longest mechanics step [s] ...
+#: step control where nothing moves (the pull): the longest block [s] ...
 HELD_STEP_S = 1.0
 #: ... taken only while every group's uplift is below its hold by this fraction of its H_0
 HELD_MARGIN = 0.05
@@ -143,13 +143,15 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
 
 
 def held_steps(settings: Settings) -> int:
-    """Base steps per mechanics step while every group is held (:func:`flexlift.ascent.
+    """Base steps per block of step control where nothing moves (:func:`flexlift.ascent.
     kernel.held_block`): the largest divisor of the steps per recorded row (so every row is
-    a block's first step) whose length is at most ``HELD_STEP_S``; 1 (off) if none is
-    longer than one step."""
+    a block's first step) that is a multiple of the steps per control sample (so every
+    block's first step is a sample) and whose length is at most ``HELD_STEP_S``; 1 (off) if
+    none is longer than one step."""
     best = 1
     for m in range(1, settings.k_out + 1):
-        if settings.k_out % m == 0 and m * settings.dt <= HELD_STEP_S + 1e-9:
+        if (settings.k_out % m == 0 and m % settings.k_ctrl == 0
+                and m * settings.dt <= HELD_STEP_S + 1e-9):
             best = m
     return best
 
@@ -318,9 +320,10 @@ class Ascent:
         detail = apply_fault(fault, t, names, self.switches,
                              self.controllers.bags, self.control_state)
         # a held block ends here (kernel.held_block): the steps after a fault are base steps
-        # (the held structure's mechanics, taken to the block's end at its first step, barely
-        # moved; the force extrapolation restarts)
-        self.state.counters[1] &= ~(F_HELD | F_QUIET | F_HAVE_B)
+        # (the held structure's mechanics were taken to the block's end at its first step:
+        # it barely moves; the force extrapolation restarts). Outside a block: nothing.
+        if self.state.counters[1] & F_HELD:
+            self.state.counters[1] &= ~(F_HELD | F_QUIET | F_HAVE_B)
         self.fault_events.append((t, fault.kind, fault.bag, detail))
 
     def _per_bag(self) -> None:

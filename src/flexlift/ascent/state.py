@@ -44,8 +44,8 @@ class Settings(NamedTuple):
     pitch_limit: float  # pitch limit [rad]
     top_limit: np.ndarray  # (nb,) a bag point above this breaches the surface [m]
     external: bool  # the supervisor is evaluated outside the compiled loop
-    held_steps: int  # step control while every group is held: base steps per mechanics
-    #                  step (1: off; kernel.held_block)
+    held_steps: int  # step control where nothing moves (the pull): base steps per block
+    #                  (1: off; kernel.held_block)
     held_margin: float  # ... only while every group's uplift is below its hold by this
     #                     fraction of its H_0 [-]
 
