@@ -224,20 +224,13 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
     if k == settings.n_steps:
         state.counters[0] = k + 1
         return RET_STOP
-    rates(plant, state, switches)
-    state.z_prev[:] = state.z
-    state.work[4] = state.q
-    state.work[5] = state.v
+    step_start(plant, state, switches)
     if held > 0:
         held_mechanics(plant, state, held * settings.dt)
     elif held < 0:
         mechanics(plant, state, switches, settings, w_min, noise)
     finish_step(t, plant, state, switches, settings, recorder, noise)
-    state.counters[0] = k + 1
-    if k % 100 == 0 and not healthy(state):
-        log_event(recorder, t + settings.dt, EV_NUMERICS, -1, 0.0)
-        return RET_STOP
-    return RET_DONE
+    return next_step(t, k, state, settings, recorder)
 
 
 @inline_jit
@@ -312,11 +305,25 @@ def quiet_step(t, k, plant, state, switches, settings, recorder):
     # reads no clearance (w_min) before one is
     if events(t, plant, state, switches, settings, recorder, 0.0) != RET_DONE:
         return RET_STOP
+    step_start(plant, state, switches)
+    holding(t, plant, state, switches, settings, recorder, switches.noise[0])
+    return next_step(t, k, state, settings, recorder)
+
+
+@inline_jit
+def step_start(plant, state, switches):
+    """What the step's end reads of its start: the rates (:func:`rates`), the heights (for
+    the arrivals' interpolation), q and q' (a separation redoes the step from them)."""
     rates(plant, state, switches)
     state.z_prev[:] = state.z
     state.work[4] = state.q
     state.work[5] = state.v
-    holding(t, plant, state, switches, settings, recorder, switches.noise[0])
+
+
+@inline_jit
+def next_step(t, k, state, settings, recorder):
+    """On to step k + 1; every 100 steps the state checked (RET_STOP when it is not finite
+    or has blown up)."""
     state.counters[0] = k + 1
     if k % 100 == 0 and not healthy(state):
         log_event(recorder, t + settings.dt, EV_NUMERICS, -1, 0.0)
