@@ -60,3 +60,32 @@ def test_round_trip_and_checksum(tanker, tmp_path):
     assert again.checksum() == tanker.checksum()
     changed = tanker.with_changes(**{"hull.elements": 20})
     assert changed.hull.elements == 20 and changed.checksum() != tanker.checksum()
+
+
+@pytest.mark.parametrize("name", ["tanker", "pipeline"])
+def test_the_checksum_is_the_sha256_of_the_whole_yaml_dumped_by_sections(name):
+    """The checksum dumps each top-level section alone and keeps it (a sweep's cases share
+    most of them): the same text as dumping the whole scenario, before and after a change,
+    and a changed value reaches the hash, also one -0.0 from 0.0 or 1 from 1.0 apart."""
+    import hashlib
+
+    from flexlift.scenario.file import dump_sections, dump_yaml
+
+    base = load_scenario(name)
+    for sc in (base, base.with_changes(**{"seabed.breakout_time_s": 321.5}), base,
+               base.with_changes(**{"disturbance.current_m_s": -0.0}),
+               base.with_changes(**{"disturbance.current_m_s": 0.0})):
+        data = sc.model_dump(mode="json")
+        assert dump_sections(data) == dump_yaml(data)
+        assert sc.checksum() == hashlib.sha256(sc.to_yaml().encode()).hexdigest()
+    assert (base.with_changes(**{"disturbance.current_m_s": -0.0}).checksum()
+            != base.with_changes(**{"disturbance.current_m_s": 0.0}).checksum())
+
+
+def test_dump_sections_falls_back_to_the_whole_dump_where_text_could_differ():
+    from flexlift.scenario.file import dump_sections, dump_yaml
+
+    shared = [1.0, 2.0]
+    for data in ({}, {"a": shared, "b": shared}, {"a": {"x": 1}, "b": (1, 2)},
+                 {"a": 1, "b": 1.0, "c": True, "d": "1"}):
+        assert dump_sections(data) == dump_yaml(data)

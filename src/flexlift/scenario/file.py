@@ -14,6 +14,7 @@ text), so that a schema with strict numbers accepts what engineers write.
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -70,6 +71,55 @@ _Loader.add_constructor("tag:yaml.org,2002:int", _Loader.construct_yaml_int)
 def dump_yaml(data) -> str:
     """``data`` as YAML that :func:`load_yaml` reads back as the same data."""
     return yaml.dump(data, Dumper=_FastDumper, sort_keys=False)
+
+
+#: sections' YAML kept per process by :func:`dump_sections` (a sweep's cases differ from their
+#: base in a few sections; the checksum re-dumped every section: about 2 ms of a case)
+SECTIONS_KEPT = 256
+_SECTIONS: dict[str, str] = {}
+
+
+def dump_sections(data: dict) -> str:
+    """:func:`dump_yaml` of a JSON-ready mapping (a scenario's ``model_dump(mode="json")``),
+    the same text, each top-level entry dumped on its own and kept by its JSON: a block
+    mapping at the top level is its entries' lines one after another, each written alone
+    the same way. Where the text could differ, the whole is dumped: an empty mapping, values
+    that share an object (YAML would write an anchor and an alias across entries), a value
+    not of JSON's types (a tuple's JSON is a list's)."""
+    if not data or not isinstance(data, dict) or not _plain(data):
+        return dump_yaml(data)
+    parts = []
+    for key, value in data.items():
+        try:
+            ident = json.dumps([key, value])
+        except (TypeError, ValueError):  # not JSON-ready: no key to keep it by
+            return dump_yaml(data)
+        text = _SECTIONS.get(ident)
+        if text is None:
+            text = dump_yaml({key: value})
+            _SECTIONS[ident] = text
+            while len(_SECTIONS) > SECTIONS_KEPT:
+                _SECTIONS.pop(next(iter(_SECTIONS)))
+        parts.append(text)
+    return "".join(parts)
+
+
+def _plain(data) -> bool:
+    """Whether ``data`` holds only JSON's types (dict, list, str, int, float, bool, None: two
+    values with the same JSON then have the same YAML) and no list or mapping twice."""
+    seen: set[int] = set()
+    todo = [data]
+    while todo:
+        obj = todo.pop()
+        if isinstance(obj, dict | list):
+            if id(obj) in seen or (isinstance(obj, dict)
+                                   and not all(isinstance(k, str) for k in obj)):
+                return False
+            seen.add(id(obj))
+            todo.extend(obj.values() if isinstance(obj, dict) else obj)
+        elif not (obj is None or isinstance(obj, str | int | float)):  # bool is an int
+            return False
+    return True
 
 
 # --------------------------------------------------------------------------- the file

@@ -46,7 +46,7 @@ from flexlift.scenario.defaults import (
     missing_required,
     plausibility,
 )
-from flexlift.scenario.file import decode, dump_yaml, load_yaml, read_bytes
+from flexlift.scenario.file import decode, dump_sections, dump_yaml, load_yaml, read_bytes
 from flexlift.scenario.messages import first_error, format_error
 from flexlift.scenario.pipe import Pipe, derive, underive
 from flexlift.scenario.types import (
@@ -655,14 +655,11 @@ class Scenario(_Section):
         """SHA-256 of the canonical YAML: two runs with the same checksum had the same input.
         A user's .fis file counts by its contents (its SHA-256), not by where it lies, so the
         copy in an output folder has the checksum of the original."""
-        files = {key: path for key, path in self.controller_files().items()}
-        if not files:
-            return hashlib.sha256(self.to_yaml().encode()).hexdigest()
         data = self.model_dump(mode="json")
-        for key, path in files.items():
+        for key, path in self.controller_files().items():
             section, sub_, _ = key.split(".")
             data[section][sub_]["fis_file"] = "sha256:" + file_sha256(path)
-        return hashlib.sha256(dump_yaml(data).encode()).hexdigest()
+        return hashlib.sha256(dump_sections(data).encode()).hexdigest()
 
     def controller_files(self) -> dict[str, str]:
         """The user's .fis files by key ("control.supervisor.fis_file", ...): path."""
