@@ -74,7 +74,7 @@ import math
 import numpy as np
 
 from flexlift._jit import inline_jit, jit
-from flexlift._struct import as_struct
+from flexlift._struct import as_struct, view
 from flexlift.ascent.linalg import dot
 from flexlift.ascent.mechanics import (
     bag_forces,
@@ -137,15 +137,24 @@ def advance(loop, k_stop):
     (``RET_DONE``: reached k_stop or the last step, ``RET_STOP``, ``RET_NEED_U``). ``loop``
     is a :class:`~flexlift.ascent.records.LoopInputs`; inside, its records are passed by
     reference (:func:`flexlift._struct.as_struct`)."""
-    return _advance(*_structs(loop), k_stop)
+    return _advance(_structs(loop), k_stop)
 
 
 @jit
 def _structs(loop):
-    """The records of ``loop`` as structs, in the order of :class:`LoopInputs`."""
+    """The records of ``loop`` as structs, in the order of :class:`LoopInputs`: each entry
+    point holds them (an argument of its inner function) while the step works on views."""
     return (as_struct(loop.plant), as_struct(loop.controllers), as_struct(loop.control_state),
             as_struct(loop.state), as_struct(loop.switches), as_struct(loop.settings),
             as_struct(loop.recorder))
+
+
+@inline_jit
+def _views(owned):
+    """Views of the structs ``owned`` (:func:`flexlift._struct.view`: passed and read with
+    no reference counted), in the same order; valid while the caller holds ``owned``."""
+    return (view(owned[0]), view(owned[1]), view(owned[2]), view(owned[3]), view(owned[4]),
+            view(owned[5]), view(owned[6]))
 
 
 @jit
@@ -153,7 +162,12 @@ def initial_equilibrium(loop):
     """The loads of the state in ``loop.state`` (:class:`LoopInputs`), and the modal
     coordinates at rest on the held seabed springs under them (least squares: the paper's
     bag models have a mode that their one spring does not hold)."""
-    plant, controllers, control_state, state, switches, settings, recorder = _structs(loop)
+    _initial_equilibrium(_structs(loop))
+
+
+@jit
+def _initial_equilibrium(owned):
+    plant, controllers, control_state, state, switches, settings, recorder = _views(owned)
     bag_motion(plant, state.q, state.v, state.z, state.zd)
     bag_gas(plant, state.n, state.z, state.p, state.V)
     _loads_at_state(plant, state, switches, switches.noise[0])
@@ -167,12 +181,18 @@ def initial_equilibrium(loop):
 @jit
 def final_row(t, loop):
     """A recorded row of the current state (:class:`LoopInputs`), at the end of a run."""
-    plant, controllers, control_state, state, switches, settings, recorder = _structs(loop)
+    _final_row(t, _structs(loop))
+
+
+@jit
+def _final_row(t, owned):
+    plant, controllers, control_state, state, switches, settings, recorder = _views(owned)
     store_row(t, plant, controllers, control_state, state, switches, recorder)
 
 
 @jit
-def _advance(plant, controllers, control_state, state, switches, settings, recorder, k_stop):
+def _advance(owned, k_stop):
+    plant, controllers, control_state, state, switches, settings, recorder = _views(owned)
     while state.counters[0] < k_stop:
         code = step(plant, controllers, control_state, state, switches, settings, recorder)
         if code != RET_DONE:
