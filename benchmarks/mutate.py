@@ -163,10 +163,15 @@ MUTATIONS = (
       "the hold's uplift still counts a broken sling's bag"),
     # ------------------------------------------------------------------ gas and hold in the loop
     M("purge-orifice-loop", "ascent/kernel.py",
-      "purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],\n"
-      "                           plant.bags.purge_max[i])",
+      "purge = _purge(plant, i, state.opening[i], state.V[i])",
       "purge = state.opening[i] * plant.bags.purge_max[i]",
       "the loop's start-of-step purge flow without the orifice law"),
+    M("purge-closed-below-half", "ascent/kernel.py",
+      "    if opening <= 0.0:\n        return 0.0", "    if opening <= 0.5:\n        return 0.0",
+      "a valve opened less than half way purges nothing"),
+    M("purge-account-end-only", "ascent/kernel.py",
+      "if purge0 != 0.0 or purge1 != 0.0:", "if purge1 != 0.0:",
+      "a step whose purge closed by its end leaves its purged gas out of the accounts"),
     M("boyle-loop", "ascent/kernel.py",
       "p1 = ambient_pressure(state.z[i], bags.water_depth, bags.p_atm, bags.rho_g)",
       "p1 = state.p[i]",

@@ -527,8 +527,7 @@ def rates(plant, state, switches):
     state.gap."""
     for i in range(plant.bags.nb):
         fill = state.fill[i] * switches.supply[i]
-        purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],
-                           plant.bags.purge_max[i])
+        purge = _purge(plant, i, state.opening[i], state.V[i])
         state.ndot[i] = (moles_rate(state.p[i], fill, purge, plant.bags.RT)
                          - switches.leak[i] * state.n[i])
         state.flow0[0, i], state.flow0[1, i] = state.p[i], purge
@@ -536,6 +535,16 @@ def rates(plant, state, switches):
         state.H_old[g] = state.H[g]
         state.gap[g] = group_uplift(plant, state.V, switches.attached,
                                     g) - state.H[g]
+
+
+@inline_jit
+def _purge(plant, i, opening, volume):
+    """Bag ``i``'s purge flow [m^3/s] at valve ``opening`` with gas ``volume`` [m^3]
+    (:func:`flexlift.physics.gas.purge_flow`): a closed valve's is exactly 0 (the law's
+    0 x Q_max x sqrt(V / V_max)) without its division and square root."""
+    if opening <= 0.0:
+        return 0.0
+    return purge_flow(opening, volume, plant.bags.capacity[i], plant.bags.purge_max[i])
 
 
 @jit
@@ -707,18 +716,24 @@ def _gas_step(i, dt, plant, state, switches):
     p0, purge0 = state.flow0[0, i], state.flow0[1, i]
     p1 = ambient_pressure(state.z[i], bags.water_depth, bags.p_atm, bags.rho_g)
     n_pred = max(state.n[i] + dt * state.ndot[i], 0.0)
-    purge1 = purge_flow(state.opening[i], gas_volume(n_pred, p1, bags.RT, bags.capacity[i]),
-                        bags.capacity[i], bags.purge_max[i])
-    ndot1 = moles_rate(p1, fill, purge1, bags.RT) - switches.leak[i] * n_pred
-    state.gas_local[i] += fill * dt
-    state.gas_free[i] += 0.5 * (free_air(fill * dt, p0, bags.p_atm)
-                                + free_air(fill * dt, p1, bags.p_atm))
-    state.purged[i] += 0.5 * dt * (purge0 + purge1)
-    state.purged_free[i] += 0.5 * dt * (free_air(purge0, p0, bags.p_atm)
-                                        + free_air(purge1, p1, bags.p_atm))
-    state.vented[i] += 0.5 * dt * switches.leak[i] * bags.RT * (state.n[i] / p0 + n_pred / p1)
-    state.vented_free[i] += (0.5 * dt * switches.leak[i] * bags.RT * (state.n[i] + n_pred)
-                             / bags.p_atm)
+    purge1 = _purge(plant, i, state.opening[i], gas_volume(n_pred, p1, bags.RT,
+                                                           bags.capacity[i]))
+    leak = switches.leak[i]
+    ndot1 = moles_rate(p1, fill, purge1, bags.RT) - leak * n_pred
+    # the accounts: a flow that is zero over the step adds exactly zero, so it is skipped
+    # (most steps neither fill, purge nor leak: their divisions were a tenth of the loop)
+    if fill != 0.0:
+        state.gas_local[i] += fill * dt
+        state.gas_free[i] += 0.5 * (free_air(fill * dt, p0, bags.p_atm)
+                                    + free_air(fill * dt, p1, bags.p_atm))
+    if purge0 != 0.0 or purge1 != 0.0:
+        state.purged[i] += 0.5 * dt * (purge0 + purge1)
+        state.purged_free[i] += 0.5 * dt * (free_air(purge0, p0, bags.p_atm)
+                                            + free_air(purge1, p1, bags.p_atm))
+    if leak != 0.0:
+        state.vented[i] += 0.5 * dt * leak * bags.RT * (state.n[i] / p0 + n_pred / p1)
+        state.vented_free[i] += (0.5 * dt * leak * bags.RT * (state.n[i] + n_pred)
+                                 / bags.p_atm)
     state.p[i] = p1
     return max(state.n[i] + 0.5 * dt * (state.ndot[i] + ndot1), 0.0)
 
