@@ -184,6 +184,7 @@ def test_numerics_failure_keeps_partial_results(quick, monkeypatch):
         return real(loop, k_stop)
 
     monkeypatch.setattr(loop, "CHUNK_STEPS", 100)
+    monkeypatch.setattr(loop, "QUIET_CHUNK_STEPS", 100)  # no progress bar here
     monkeypatch.setattr(loop.kernel, "advance", corrupting)
     with pytest.raises(SimulationError, match="numerics failed") as err:
         simulate(quick, duration=200.0)
@@ -274,3 +275,31 @@ def test_the_progress_bar_moves_evenly_to_the_end():
     simulate(load_scenario("tanker"), control="coordinated", progress=seen.append)
     assert seen[-1] == 1.0 and seen == sorted(seen)
     assert seen[-2] >= 0.9, seen[-5:]  # the last update before the end
+
+
+def test_a_run_with_nothing_between_chunks_takes_long_chunks_with_the_same_result(quick):
+    """Without a progress bar, noise, an external supervisor or the validity check, the loop
+    is entered in chunks of QUIET_CHUNK_STEPS: fewer calls, the same run as in short chunks
+    (a progress bar keeps CHUNK_STEPS)."""
+    import flexlift.ascent.loop as loop
+
+    calls = []
+    real = loop.kernel.advance
+
+    def counting(inputs, k_stop):
+        calls.append(int(k_stop))
+        return real(inputs, k_stop)
+
+    loop.kernel.advance = counting
+    try:
+        quiet = simulate(quick, duration=300.0)
+        n_quiet = len(calls)
+        calls.clear()
+        shown = simulate(quick, duration=300.0, progress=lambda f: None)
+    finally:
+        loop.kernel.advance = real
+    steps = int(round(300.0 / quick.simulation.time_step_s))
+    assert n_quiet == 1 and len(calls) == -(-(steps + 1) // loop.CHUNK_STEPS)
+    assert quiet.headline == shown.headline and quiet.events == shown.events
+    for name in ("height", "gas_volume", "bending_moment"):
+        np.testing.assert_array_equal(quiet.dataset[name].values, shown.dataset[name].values)

@@ -325,6 +325,7 @@ def test_numerics_failing_in_one_case_is_recorded_and_the_sweep_goes_on(tmp_path
         return real(loop, k_stop)
 
     monkeypatch.setattr(loop.kernel, "advance", corrupting)
+    monkeypatch.setattr(loop, "QUIET_CHUNK_STEPS", loop.CHUNK_STEPS)  # calls every 200 s
     spec = parse_spec(grid({"disturbance.current_m_s": [0.0, 0.01, 0.0]},
                            control=("coordinated",)))
     res = run_sweep(spec, tmp_path / "o", engine=Serial())
