@@ -19,8 +19,9 @@ generalised force, extrapolated to mid-step (Adams-Bashforth 2): the trapezoidal
 rebuilt only when the set of strips in contact changes, or the step length does.
 
 Each law takes the plant (:class:`~flexlift.ascent.records.PlantRecords`, a struct in the loop)
-and reads the part it needs (``bags = plant.bags``): passing the part itself would cost the
-loop a reference count per call.
+and reads the part it needs (``bags = plant.bags``, a view: :mod:`flexlift._struct`). Inside
+a loop over strips or bags, the arrays it reads are taken once before the loop
+(:func:`strip_loads`): read through the struct, each would be found again after every store.
 """
 
 from __future__ import annotations

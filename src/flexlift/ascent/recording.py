@@ -83,7 +83,7 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
 def group_uplift(plant, V, attached, g):
     """Net uplift U_g of holding group ``g`` [N]: its bags' buoyancy minus its wet weight
     (a bag standing for ``count`` identical bags counted that many times)."""
-    bags = plant.bags  # read once: each read of a struct out of a struct is a reference
+    bags = plant.bags
     total = 0.0
     for i in range(V.size):
         if bags.group[i] == g:

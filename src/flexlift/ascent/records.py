@@ -14,8 +14,8 @@ records of arrays, SI throughout:
 :class:`LoopInputs` gathers it with the controllers' and the run's records
 (:mod:`flexlift.control.controller`, :mod:`flexlift.ascent.state`): the one argument of the
 compiled loop (:mod:`flexlift.ascent.kernel`). Inside the loop each record is a struct
-passed as one pointer, at the price of a reference count per record a function takes (a
-few ns a call): the plant is one of them, not four.
+passed as one pointer, as a view that counts no reference (:mod:`flexlift._struct`); the
+plant's four records are views inside it (``plant.bags``).
 
 """
 
