@@ -279,6 +279,22 @@ def test_the_purge_flow_integrated_is_the_orifice_law(plant, opening):
     assert R.n[1] == n0  # the other bags are shut
 
 
+def test_a_bag_purged_empty_within_a_step_counts_that_steps_purge(plant):
+    """The purge account adds 0.5 dt (Q_0 + Q_1) a step (Heun); a bag whose predicted gas runs
+    out within the step (so Q_1 = 0, the valve still open) counts its start-of-step purge Q_0:
+    the step's account is not skipped."""
+    run = start(plant)
+    R, a = run.state, plant
+    dt, Q = run.settings.dt, GAS.purge_rate_max_m3_s
+    R.opening[0] = 1.0
+    V_small = 0.5 * (dt * Q) ** 2 / a.bags.capacity[0]  # below (dt Q)^2 / V_max: empty in a step
+    R.n[0] = V_small * R.p[0] / RT
+    advance(run)
+    purge0 = R.flow0[1, 0]
+    assert purge0 > 0.0 and dt * purge0 > V_small  # the Euler prediction is empty: Q_1 = 0
+    assert R.purged[0] == pytest.approx(0.5 * dt * purge0, rel=1e-12)
+
+
 def test_fill_and_a_failed_supply(plant):
     """A fill command Q_in at local pressure adds p Q_in / (R T) mol/s; with the supply failed
     the same command adds nothing."""

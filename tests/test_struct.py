@@ -5,6 +5,7 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+import pytest
 
 from flexlift._struct import as_struct, view
 
@@ -107,6 +108,7 @@ def _entry(t, n):
     return _on_views(as_struct(t), n)
 
 
+@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="NUMBA_DISABLE_JIT: nothing is allocated")
 def test_views_read_and_write_the_same_struct_and_no_struct_is_leaked():
     """A struct inside a struct is a view kept alive by its hidden owner (``owns_pair``),
     and view() of a held struct is the same struct: the reads and writes go to the tuple's
@@ -139,3 +141,14 @@ def test_the_fields_of_a_struct_inside_are_a_view_and_its_owner():
     st = _struct_type(numba.typeof(Outer(Pair(np.ones(3), np.ones(2), 2), np.ones(1))))
     assert isinstance(st.field_dict["pair"], View)
     assert st.field_dict["owns_pair"].field_dict == st.field_dict["pair"].field_dict
+
+
+def test_the_loops_entry_points_that_hold_the_structs_are_real_calls():
+    """The kernel's views are valid only while a caller holds their structs: the functions
+    taking the owning tuple (``_advance``, ``_initial_equilibrium``, ``_final_row``) must stay
+    calls. Inlined, the tuple would be freed after its last use, the views' memory reused
+    (a reviewer's experiment: the step read another struct's numbers)."""
+    from flexlift.ascent import kernel
+
+    for fn in (kernel._advance, kernel._initial_equilibrium, kernel._final_row):
+        assert getattr(fn, "targetoptions", {"inline": "never"}).get("inline", "never") == "never"

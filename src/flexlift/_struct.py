@@ -24,7 +24,10 @@ data model holds nothing numba counts), kept alive by a hidden owning field besi
 (``owns_bags``), which the outer struct frees with itself; and :func:`view` gives the same of a
 whole struct, for code that holds the struct itself meanwhile (the loop's entry passes the
 owning tuple of structs down and works on views of them). A view must never outlive the
-struct it was taken from.
+struct it was taken from: the function that takes the owning structs as an argument must stay
+a real call (numba frees a local or an inlined argument after its last use, and the views
+would read reused memory: tests/test_struct.py checks the kernel's), and a view is never kept
+in a container (a typed List) or returned (numba refuses to return one to Python).
 
 Only numba's public extension APIs are used: ``structref.register`` and
 ``structref.define_attributes`` for the types and their attributes (with numba's own

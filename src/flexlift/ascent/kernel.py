@@ -154,7 +154,9 @@ def _structs(loop):
 @inline_jit
 def _views(owned):
     """Views of the structs ``owned`` (:func:`flexlift._struct.view`: passed and read with
-    no reference counted), in the same order; valid while the caller holds ``owned``."""
+    no reference counted), in the same order; valid while the caller holds ``owned``: the
+    functions that take ``owned`` as an argument (``_advance``, ``_initial_equilibrium``,
+    ``_final_row``) stay calls, never inlined."""
     return (view(owned[0]), view(owned[1]), view(owned[2]), view(owned[3]), view(owned[4]),
             view(owned[5]), view(owned[6]))
 
