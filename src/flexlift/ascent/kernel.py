@@ -61,9 +61,9 @@ positional argument:
   inline_jit`), compiled into its caller. A call between compiled functions took a
   reference on every struct it passed (an atomic count each) before the views: the step's
   parts inlined (``control``, ``events``, ``finish_step``, the gas step, the rates) took a
-  tanker step from 1.95 to 1.75 µs, the first compile from 70 to 85 s. A large function called from several
-  places (the strip loads, the implicit step) stays a call, and so does ``step`` (inlined
-  into ``_advance`` it made the compile 106 s, for nothing measurable).
+  tanker step from 1.95 to 1.75 µs, the first compile from 70 to 85 s. A large function
+  called from several places (the strip loads, the implicit step) stays a call, and so does
+  ``step`` (inlined into ``_advance`` it made the compile 106 s, for nothing measurable).
 
 Renaming or removing a record's class leaves numba's on-disk cache index naming the old
 class: delete the ``*.nbi``/``*.nbc`` files of ``__pycache__`` after such a change.
