@@ -236,6 +236,38 @@ def test_the_sweep_stops_at_the_first_block_end_within_the_half_width(method, tm
     assert max(halfwidths(more.records, ["coordinated"]).values()) <= 0.03
 
 
+def test_the_progress_counts_failed_cases_as_they_come_and_those_resumed(tmp_path,
+                                                                        monkeypatch):
+    # the count is kept as records arrive (a recount per case was n^2 / 2 in a long sweep)
+    statuses = []
+
+    def failing_case(task):  # a failed case where the drag coefficient is below 0.2
+        record, ds = known_case(task)
+        if task.changes["hydro.drag_coefficient"] < 0.2:
+            record["status"] = "failed"
+            for res in record["results"].values():
+                res.update(status="failed", error="numerics failed", outcome="failed",
+                           criteria={k: False for k in res["criteria"]})
+        statuses.append(record["status"] != "completed")
+        return record, ds
+
+    calls = []
+    monkeypatch.setattr("flexlift.sweep.run.run_case", failing_case)
+    first = run_sweep(halfwidth_spec(0.1), tmp_path / "o", engine=Serial(),
+                      progress=lambda done, total, failed: calls.append((done, failed)))
+    assert first.failed > 0
+    # first the state it starts from, then a call per case
+    assert calls == [(0, 0)] + [(k + 1, sum(statuses[:k + 1])) for k in range(len(statuses))]
+    before, n = first.failed, len(first.records)
+    statuses.clear(), calls.clear()
+    more = run_sweep(halfwidth_spec(0.05), tmp_path / "o", engine=Serial(),
+                     progress=lambda done, total, failed: calls.append((done, failed)))
+    assert more.ran > 0 and more.failed > before
+    assert calls == [(n, before)] + [(n + k + 1, before + sum(statuses[:k + 1]))
+                                     for k in range(len(statuses))]
+    assert calls[-1][1] == more.failed
+
+
 def test_each_lhs_block_is_its_own_hypercube():
     spec = halfwidth_spec(0.1, "lhs", samples=120, block=40)
     u = uniforms(spec)

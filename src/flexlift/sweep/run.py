@@ -265,8 +265,12 @@ def estimate_sweep(spec: SweepSpec, workers: int) -> tuple[float, float]:
     return per, per * len(cases) / max(1, int(workers))
 
 
+def _failed(record: dict) -> int:
+    return int(record["status"] != "completed")
+
+
 def _failures(records: dict) -> int:
-    return sum(r["status"] != "completed" for r in records.values())
+    return sum(map(_failed, records.values()))
 
 
 def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, progress,
@@ -282,6 +286,7 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
     attempts: dict[int, int] = collections.Counter()
     inflight: dict[cf.Future, Case] = {}
     total = len(names)
+    failed = _failures(records)  # then counted as cases end (a recount per case: n^2 / 2)
     while queue or suspects or inflight:
         # a suspect (its worker died once) runs alone, when nothing else is in flight
         while suspects and not inflight:
@@ -312,8 +317,9 @@ def _execute(engine, spec, todo: list[Case], names, folder, records, run_id, pro
             record.update(values=dict(case.values), noise_seed=case.seed, run_id=run_id,
                           attempts=attempts[case.index])
             records[case.index] = folder.write_case(names[case.index], record, datasets)
+            failed += _failed(records[case.index])
             if progress is not None:
-                progress(len(records), total, _failures(records))
+                progress(len(records), total, failed)
         if bug is not None:
             raise bug
         check = getattr(engine, "check", None)
