@@ -92,6 +92,22 @@ def test_a_guarded_question_goes_to_xarray_once_dask_is_imported():
     assert _run(code) == ["1", "0", "0", "1", "0"]
 
 
+def test_the_command_line_starts_the_pool_before_asking_for_its_version():
+    """The version comes from importlib.metadata (40 ms to import) when first asked for, not
+    on importing the package: the command line imports the package and starts a sweep's
+    fork server before anything asks."""
+    code = ("import sys, flexlift.cli, flexlift.sweep.executors\n"
+            "print(int('importlib.metadata' in sys.modules))\n"
+            "from importlib.metadata import version\n"
+            "import flexlift\n"
+            "print(int(flexlift.__version__ == version('flexlift')))\n"
+            "try:\n"
+            "    flexlift.no_such_name\n"
+            "except AttributeError as exc:\n"
+            "    print('AttributeError', int('no_such_name' in str(exc)))\n")
+    assert _run(code) == ["0", "1", "AttributeError", "1"]
+
+
 def test_the_fork_server_imports_no_dask_and_freezes_its_objects():
     """The warm-up (the fork server's preload) records summaries only: it imports neither
     xarray, pandas nor Dask; its objects are frozen (the workers never scan them), and so are

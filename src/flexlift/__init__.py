@@ -24,14 +24,23 @@ Units are SI throughout (m, s, kg, N, Pa, rad); tonnes, degrees and bar appear o
 scenario files and reports.
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("flexlift")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0+unknown"
-
 __all__ = ["__version__", "loaded"]
+
+
+def __getattr__(name: str):
+    """``__version__``, looked up when first asked for: importing :mod:`importlib.metadata`
+    takes 40 ms, paid before a sweep can start its worker pool (the command line imports this
+    package first)."""
+    if name != "__version__":
+        raise AttributeError(f"module 'flexlift' has no attribute {name!r}")
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        value = version("flexlift")
+    except PackageNotFoundError:  # running from a source tree without installation
+        value = "0+unknown"
+    globals()["__version__"] = value
+    return value
 
 
 def loaded(scenario):

@@ -27,7 +27,7 @@ import signal
 import sys
 import traceback
 
-from flexlift import __version__
+import flexlift
 from flexlift.errors import LINE_LIMIT, InputError, SimulationError, clean
 
 #: sub-command modules, in the order of the analysis
@@ -51,7 +51,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         prog="flexlift",
         description="Raise a sunken flexible hull with controlled lift bags.",
     )
-    parser.add_argument("--version", action="version", version=f"flexlift {__version__}")
+    parser.add_argument("--version", action="version", version=f"flexlift {flexlift.__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in (command,) if command in COMMANDS else COMMANDS:

@@ -101,8 +101,16 @@ class ReadMemo:
         the keys it depends on)."""
         with self._lock:
             groups = list(self._groups.items())
+        seen: dict[str, object] = {}  # each key's value read once (a miss reads them again)
+
+        def values_of(keys):
+            for k in keys:
+                if k not in seen:
+                    seen[k] = _value(scenario, k)
+            return tuple(seen[k] for k in keys)
+
         for keys, kept in groups:
-            values = tuple(_value(scenario, k) for k in keys)
+            values = values_of(keys)
             with self._lock:
                 if values in kept:
                     self._order.move_to_end((keys, values))
@@ -113,7 +121,7 @@ class ReadMemo:
         keys = tuple(sorted(log | set(extra)))
         if _WHOLE in keys:
             keys = (_WHOLE,)
-        values = tuple(_value(scenario, k) for k in keys)
+        values = values_of(keys)
         with self._lock:
             self.misses += 1
             self._groups.setdefault(keys, {})[values] = result
