@@ -16,8 +16,10 @@ as ``bench_bags.py`` does), timed from its start to its exit:
 
 Per sweep: ``wall_s``, ``ascents_per_s`` (cases / wall), ``steady_per_s`` (between the first
 and the last case file written), ``fixed_s`` (wall - cases / steady: the start and the end
-of a sweep: imports, the pool, the numba load, the results), ``case_in_worker_s`` (the mean of
-the cases' own ``elapsed_s``: the case in the loop, as the worker timed it). The load average
+of a sweep: imports, the pool, the numba load, the results), its two parts ``start_s`` (until
+the first case file, less that case's own time in its worker) and ``end_s`` (from the last
+case file to the exit: the results, the report), ``case_in_worker_s`` (the mean of the
+cases' own ``elapsed_s``: the case in the loop, as the worker timed it). The load average
 is recorded before and after. ``python benchmarks/bench_sweep.py [--samples 1000]
 [--bags-samples 100] [--no-baseline | --baseline COMMIT] [--out FILE]``; writes
 ``benchmarks/sweep.json``.
@@ -81,7 +83,7 @@ def _specs(folder: Path, samples: int, bags_samples: int) -> dict[str, Path]:
 def _sweep(src: Path, args: list[str], out: Path, timeout: float) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src), MPLBACKEND="Agg")
     shutil.rmtree(out, ignore_errors=True)
-    t0 = time.perf_counter()
+    t0, t0_wall = time.perf_counter(), time.time()
     proc = subprocess.run([sys.executable, "-m", "flexlift", "sweep", *args, "--out", str(out),
                            "--quiet", "--json", "--yes"], env=env, capture_output=True,
                           text=True, timeout=timeout)
@@ -89,9 +91,13 @@ def _sweep(src: Path, args: list[str], out: Path, timeout: float) -> dict:
     if proc.returncode:
         return {"error": proc.stderr[-1500:], "rc": proc.returncode}
     j = json.loads(proc.stdout)
-    files = sorted((out / "cases").glob("case_*.json"))
-    stamps = sorted(p.stat().st_mtime for p in files)
+    files = sorted((out / "cases").glob("case_*.json"), key=lambda p: p.stat().st_mtime)
+    stamps = [p.stat().st_mtime for p in files]
     worker = [json.loads(p.read_text()).get("elapsed_s") for p in files]
+    # the start: until the first case file, less that case's own time in its worker; the
+    # end: from the last case file to the process's exit
+    start = stamps[0] - t0_wall - (worker[0] or 0.0) if files else None
+    end = t0_wall + wall - stamps[-1] if files else None
     worker = [w for w in worker if w is not None]
     n = j["cases"]
     steady = (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 2 else None
@@ -100,6 +106,8 @@ def _sweep(src: Path, args: list[str], out: Path, timeout: float) -> dict:
             "wall_s": round(wall, 2), "ascents_per_s": round(n / wall, 2),
             "steady_per_s": round(steady, 2) if steady else None,
             "fixed_s": round(wall - n / steady, 2) if steady else None,
+            "start_s": None if start is None else round(start, 2),
+            "end_s": None if end is None else round(end, 2),
             "case_in_worker_s": round(sum(worker) / len(worker), 4) if worker else None,
             "p_fail": j["failure_probability"].get("all_criteria", {}).get("p")}
 
