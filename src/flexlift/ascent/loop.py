@@ -199,7 +199,8 @@ class Ascent:
             external=self.external is not None, held_steps=1, held_margin=HELD_MARGIN)
         if step_control:
             self.settings = self.settings._replace(held_steps=held_steps(self.settings))
-        self.state = new_run_state(modal.nr, bags.nb, strips.ns, seabed.ng)
+        self.state = new_run_state(modal.nr, bags.nb, strips.ns, seabed.ng,
+                                   bags.gen_strip.shape[0])
         self.switches = new_switches(bags.nb, strips.ns)
         self.switches.current[0] = scenario.disturbance.current_m_s
         # simulation.duration_s: auto: buffers for a first stretch, grown as the run goes on
@@ -340,7 +341,8 @@ class Ascent:
         if not cl.shared:
             return
         nr, ns, ng = self.plant.modal.nr, self.plant.strips.ns, self.plant.seabed.ng
-        self.state = expand(self.state, lambda n: new_run_state(nr, n, ns, ng), cl)
+        ne = self.state.row_force.shape[1]
+        self.state = expand(self.state, lambda n: new_run_state(nr, n, ns, ng, ne), cl)
         self.switches = expand(self.switches, lambda n: new_switches(n, ns), cl)
         rec = self.recorder
         used = {rec.snap_t.size: int(rec.counts[1])}  # the buffers' rows used

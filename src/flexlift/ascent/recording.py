@@ -37,27 +37,34 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
     r = recorder.counts[0]
     if r >= recorder.t.size:
         return
-    line = state.line + state.contact
-    # plus the static correction of the eliminated modes, through their generalised forces
-    # (records.Bags: factored, no bags x bags product)
-    ne = plant.bags.gen_strip.shape[0]
-    f_line = matvec(plant.bags.gen_strip, line, np.empty(ne))
-    f_point = matvec(plant.bags.gen_bag, state.point, np.empty(ne))
-    z = state.z + plant.bags.corr_weight
-    matvec_add(plant.bags.corr_shape, f_line, z)
-    matvec_add(plant.bags.corr_shape, f_point, z)
-    slope = matvec(plant.bags.slope, state.q, np.empty(plant.bags.nb)) + plant.bags.slope_weight
-    matvec_add(plant.bags.slope_shape, f_line, slope)
-    matvec_add(plant.bags.slope_shape, f_point, slope)
-    rate = matvec(plant.bags.slope, state.v, np.empty(plant.bags.nb))
-    nb = plant.bags.nb
+    bags, nb = plant.bags, plant.bags.nb
     out = recorder.bag[r]
     out[:, :] = np.nan
+    # the line load (explicit plus contact), and the generalised forces of the eliminated
+    # modes, into the state's row scratch: a row allocates nothing
+    line = state.row_line
+    for s in range(line.size):
+        line[s] = state.line[s] + state.contact[s]
+    # plus the static correction of the eliminated modes, through their generalised forces
+    # (records.Bags: factored, no bags x bags product); heights, slopes and their rates
+    # computed in the row itself
+    f_line = matvec(bags.gen_strip, line, state.row_force[0])
+    f_point = matvec(bags.gen_bag, state.point, state.row_force[1])
+    z = out[0]
+    for i in range(nb):
+        z[i] = state.z[i] + bags.corr_weight[i]
+    matvec_add(bags.corr_shape, f_line, z)
+    matvec_add(bags.corr_shape, f_point, z)
+    slope = matvec(bags.slope, state.q, out[2])
+    for i in range(nb):
+        slope[i] += bags.slope_weight[i]
+    matvec_add(bags.slope_shape, f_line, slope)
+    matvec_add(bags.slope_shape, f_point, slope)
+    matvec(bags.slope, state.v, out[3])  # the slopes' rates
     for i in range(nb):
         fill = state.fill[i] * switches.supply[i]
-        purge = purge_flow(state.opening[i], state.V[i], plant.bags.capacity[i],
-                           plant.bags.purge_max[i])
-        out[0, i], out[1, i], out[2, i], out[3, i] = z[i], state.zd[i], slope[i], rate[i]
+        purge = purge_flow(state.opening[i], state.V[i], bags.capacity[i], bags.purge_max[i])
+        out[1, i] = state.zd[i]
         out[4, i], out[5, i], out[6, i], out[7, i] = (fill - purge, state.V[i], state.point[i],
                                                       fill)
     for k in range(controllers.bags.size):

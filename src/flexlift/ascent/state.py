@@ -119,6 +119,9 @@ class RunState(NamedTuple):
     H_old: np.ndarray  # (ng,) holding forces at the start of the step [N]
     gap: np.ndarray  # (ng,) uplift minus hold at the start of the step [N]
     breached: np.ndarray  # (nb,) bool: the bag has breached the surface (its event logged)
+    row_line: np.ndarray  # (ns,) scratch of a recorded row: the strips' whole line load [N/m]
+    row_force: np.ndarray  # (2, ne) and its generalised forces on the eliminated modes, of
+    #                        the line and the bags' point forces [N]
 
 
 # flags in RunState.counters[1]
@@ -175,8 +178,9 @@ def new_switches(nb: int, ns: int) -> Switches:
                     np.full(2, -1, np.int64), np.zeros(nb, np.bool_), np.zeros(nb, np.bool_))
 
 
-def new_run_state(nr: int, nb: int, ns: int, ng: int) -> RunState:
-    """A zero state (the loop sets the initial gas, holding force and equilibrium)."""
+def new_run_state(nr: int, nb: int, ns: int, ng: int, ne: int) -> RunState:
+    """A zero state (the loop sets the initial gas, holding force and equilibrium); ``ne``
+    the eliminated modes of the recorded rows' static correction."""
     z = np.zeros
     nan = np.nan
     return RunState(
@@ -188,4 +192,5 @@ def new_run_state(nr: int, nb: int, ns: int, ng: int) -> RunState:
         w=z(ns), wv=z(ns), line=z(ns), contact=z(ns), active=z(ns, np.bool_),
         last_active=z(ns, np.bool_), point=z(nb), b=z(nr), implicit=z((nr, nr)),
         stiff=z((nr, nr)), damp=z((nr, nr)), meas=z((3, nb)), work=z((6, nr)), ndot=z(nb),
-        flow0=z((2, nb)), H_old=z(ng), gap=z(ng), breached=z(nb, np.bool_))
+        flow0=z((2, nb)), H_old=z(ng), gap=z(ng), breached=z(nb, np.bool_), row_line=z(ns),
+        row_force=z((2, ne)))
