@@ -38,6 +38,7 @@ def test_the_tankers_basis_names_the_paper_and_the_guideline():
     assert rows["skew load factor"]["value"] == "not applicable"
     assert "its own buoyancy" in rows["skew load factor"]["note"]
     assert rows["weight contingency"]["value"] == "none given"
+    assert "the wreck's 350 m that is ~18 m3/s of free air" in rows["gas supply per bag"]["note"]
     lp = rows["consequence factor, lift points and their attachments"]
     assert (lp["value"], lp["source"]) == (1.30, "0027/ND Table 11-1")
     daf = rows["dynamic amplification, in air (comparison only)"]
@@ -55,6 +56,8 @@ def test_a_users_hull_has_the_guidelines_tilt_and_its_assumed_values():
     assert rows["sling and shackle working load limit (per bag)"]["value"] == "55 t"
     assert rows["hydro.drag_coefficient"]["source"] == "assumed"  # every assumed value
     assert rows["gas supply per bag"]["source"] == "assumed"
+    # its free air at this wreck's depth (0.5 m3/s x 13.08 bar / 1.013 bar), not the tanker's
+    assert "the wreck's 120 m that is ~6.5 m3/s of free air" in rows["gas supply per bag"]["note"]
     assert rows["ascent velocity limit"]["source"] == "default"
 
 

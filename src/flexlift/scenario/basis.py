@@ -63,6 +63,14 @@ def source(scenario, dotted: str) -> str:
     return "default"
 
 
+def _free_air_at_wreck(scenario) -> float:
+    """A bag's fill rate at the wreck's depth as free air at the surface [m3/s] (Boyle)."""
+    env = scenario.environment
+    p = env.atmospheric_pressure_Pa + (env.seawater_density_kg_m3 * env.gravity_m_s2
+                                       * env.water_depth_m)
+    return scenario.gas.fill_rate_max_m3_s * p / env.atmospheric_pressure_Pa
+
+
 def _row(item, value, src, note="") -> dict:
     return {"item": item, "value": value, "source": src, "note": note}
 
@@ -158,8 +166,9 @@ def design_basis(scenario, weight_t: float | None = None) -> list[dict]:
              source(scenario, "hull.allowable_stress_MPa")),
         (_row("gas supply per bag", f"{scenario.gas.fill_rate_max_m3_s:g} m3/s at the bag's depth",
               source(scenario, "gas.fill_rate_max_m3_s"),
-              "no compressor stated (gas.supply_free_air_m3_min): at 350 m that is ~18 m3/s "
-              "of free air per bag")
+              "no compressor stated (gas.supply_free_air_m3_min): at the wreck's "
+              f"{scenario.environment.water_depth_m:g} m that is "
+              f"~{_free_air_at_wreck(scenario):.2g} m3/s of free air per bag")
          if scenario.gas.supply_free_air_m3_min is None else
          _row("gas supply (compressor)",
               f"{scenario.gas.supply_free_air_m3_min:g} m3/min of free air, shared; at the bag "
