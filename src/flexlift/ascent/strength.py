@@ -151,8 +151,10 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
     for i, span in enumerate(plant.spans):
         if span is not None:
             lift = gas.buoyancy(snaps["V"][:, i], plant.bags.rho_g) * snaps["attached"][:, i]
-            inside = (xe >= span[0]) & (xe <= span[1])
-            q += np.outer(lift / (span[1] - span[0]), inside)
+            # added at the span's points only (an outer product with the span's mask added
+            # zeros over the whole grid, seven passes for seven bags)
+            cols = np.flatnonzero((xe >= span[0]) & (xe <= span[1]))
+            q[:, cols] += (lift / (span[1] - span[0]))[:, None]
     return q
 
 
