@@ -20,8 +20,10 @@ of a sweep: imports, the pool, the numba load, the results), its two parts ``sta
 the first case file, less that case's own time in its worker) and ``end_s`` (from the last
 case file to the exit: the results, the report), ``case_in_worker_s`` (the mean of the
 cases' own ``elapsed_s``: the case in the loop, as the worker timed it). The load average
-is recorded before and after. ``python benchmarks/bench_sweep.py [--samples 1000]
-[--bags-samples 100] [--no-baseline | --baseline COMMIT] [--out FILE]``; writes
+is recorded before and after. ``--pairs N`` runs the tanker sweep N more times in each tree,
+alternating, for the spread of the end-to-end ratio (``tanker_pairs``: each run, the sorted
+ratios and their median). ``python benchmarks/bench_sweep.py [--samples 1000]
+[--bags-samples 100] [--no-baseline | --baseline COMMIT] [--pairs N] [--out FILE]``; writes
 ``benchmarks/sweep.json``.
 """
 
@@ -136,6 +138,29 @@ def measure_tree(src: Path, specs: dict, samples: int, work: Path, own: bool) ->
     return out
 
 
+def _pairs(base_src: Path, specs: dict, work: Path, n: int, first_current: dict,
+           first_baseline: dict) -> dict:
+    """The tanker sweep run ``n`` more times in each tree, alternating (the baseline first:
+    the first pair ran this tree first), each pair's end-to-end ratio, and their median and
+    range: the machine's drift between the two trees' runs shows as the ratios' spread."""
+    ratios = []
+    if first_current.get("wall_s") and first_baseline.get("wall_s"):
+        ratios.append(first_baseline["wall_s"] / first_current["wall_s"])
+    runs = []
+    for _ in range(n):
+        b = _sweep(base_src, [str(specs["tanker"]), "--workers", str(WORKERS)], work / "o", 7200)
+        c = _sweep(ROOT / "src", [str(specs["tanker"]), "--workers", str(WORKERS)], work / "o",
+                   7200)
+        runs.append({"current_wall_s": c.get("wall_s"), "baseline_wall_s": b.get("wall_s"),
+                     "current_case_s": c.get("case_in_worker_s"),
+                     "baseline_case_s": b.get("case_in_worker_s")})
+        if c.get("wall_s") and b.get("wall_s"):
+            ratios.append(b["wall_s"] / c["wall_s"])
+    ratios.sort()
+    return {"runs": runs, "end_to_end": [round(r, 3) for r in ratios],
+            "median": round(ratios[len(ratios) // 2], 2) if ratios else None}
+
+
 def _baseline_tree(tmp: Path, commit: str) -> Path | None:
     if shutil.which("git") is None:
         return None
@@ -153,6 +178,9 @@ def main(argv=None) -> dict:
     ap.add_argument("--baseline", default=BASELINE_COMMIT, metavar="COMMIT",
                     help=f"the commit compared in the same run (default {BASELINE_COMMIT}, "
                     "the issue's; e.g. the previous commit, with --out elsewhere)")
+    ap.add_argument("--pairs", type=int, default=0, metavar="N",
+                    help="N more runs of the tanker sweep in each tree, alternating (the "
+                    "baseline first), for the spread of the end-to-end ratio")
     ap.add_argument("--out", default=str(OUT))
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="flexlift-bench-sweep-"))
@@ -179,6 +207,10 @@ def main(argv=None) -> dict:
                                    if c.get("steady_per_s") and b.get("steady_per_s") else None),
                         "case_in_worker": round(b["case_in_worker_s"] / c["case_in_worker_s"],
                                                 2)}
+            if args.pairs > 0:
+                result["tanker_pairs"] = _pairs(base / "src", specs, tmp, args.pairs,
+                                                result["current"]["tanker"],
+                                                result["baseline"]["tanker"])
         result["wall_s"] = round(time.perf_counter() - t0, 1)
     finally:
         if base is not None:
