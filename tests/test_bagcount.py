@@ -283,6 +283,17 @@ def test_events_of_a_cluster_merge_into_one_row(hundred):
         assert row[0] == first and row[1] == "arrival"
         if p.count > 1:
             assert row[3] == f"{p.count} bags, the last at {last:.1f} s"
+    # a fault on one bag of a lift point names that bag, not the point's range of bags; two
+    # events of one bag: that bag, with the count
+    big = next(p for p in points if p.count > 1)
+    one, other = bags[big.index[1]], bags[big.index[2]]
+    ds.attrs["events"] = json.dumps([
+        {"time_s": 900.0, "kind": "bag_rupture", "bag": one, "detail": "leak_time_s 5"},
+        {"time_s": 950.0, "kind": "sensor_freeze", "bag": other, "detail": ""},
+        {"time_s": 990.0, "kind": "sensor_freeze", "bag": other, "detail": ""}])
+    assert event_rows(Result(ds)) == [
+        [900.0, "bag_rupture", one, "leak_time_s 5"],
+        [950.0, "sensor_freeze", other, "1 bag, 2 events, the last at 990.0 s"]]
 
 
 def test_results_nc_modes_with_other_bags_and_no_strength_grid(tanker, tmp_path):

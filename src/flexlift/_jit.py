@@ -116,7 +116,7 @@ _FOLDER = None if numba.config.DISABLE_JIT else cache_folder(sources_stamp())
 
 def cache_is_warm(entry: str = "kernel.advance") -> bool:
     """Whether the compiled ``entry`` (module.function of the loop) is in this process's cache
-    folder, so that the first call loads it instead of compiling (about 60-90 s); True when
+    folder, so that the first call loads it instead of compiling (85-125 s measured); True when
     nothing is compiled (``NUMBA_DISABLE_JIT``) or nothing can be cached (nothing to say)."""
     if numba.config.DISABLE_JIT or _FOLDER is None:
         return True

@@ -1,4 +1,5 @@
-"""``simulate``: the ascent of a scenario, for any plant and control mode (docs/theory/loop.md#integration).
+"""``simulate``: the ascent of a scenario, for any plant and control mode
+(docs/theory/loop.md#integration).
 
 The compiled loop (:mod:`flexlift.ascent.kernel`) runs in chunks; between chunks this module
 applies the faults due, draws the next chunk of noise, evaluates an external supervisor when

@@ -59,7 +59,8 @@ def point_tables(result, mode: str) -> tuple[Table, Table]:
 
 def event_rows(result) -> list[list]:
     """The events as table rows (time [s], kind, bag, detail), those of one kind on the bags
-    of one lift point merged into one row at the first of them ("8 bags, the last at 3446.0 s")."""
+    of one lift point merged into one row at the first of them ("8 bags, the last at 3446.0 s");
+    an event of one bag alone (a fault on it) names that bag."""
     points = lift_points(result.dataset)
     where = {b: p for p in points for b in p.bags}
     merged: dict[tuple, list[dict]] = {}
@@ -72,9 +73,15 @@ def event_rows(result) -> list[list]:
         merged.setdefault((e["kind"], p.label, e.get("detail", "")), []).append(e)
     for (kind, label, detail), es in merged.items():
         times = [e["time_s"] for e in es]
-        n = len({e["bag"] for e in es})
-        count = f"{n} bags" if n == len(es) else f"{n} bags, {len(es)} events"
+        names = {e["bag"] for e in es}
+        if len(es) == 1:  # one bag of the point (a fault on it): that bag, as it is
+            e = es[0]
+            rows.append([e["time_s"], kind, e["bag"], detail])
+            continue
+        n = len(names)
+        count = f"{n} bag{'s' if n > 1 else ''}, {len(es)} events" if n < len(es) else f"{n} bags"
         more = f"{count}, the last at {max(times):.1f} s"
-        rows.append([min(times), kind, label, f"{detail}; {more}" if detail else more])
+        where = next(iter(names)) if n == 1 else label  # one bag's events: that bag
+        rows.append([min(times), kind, where, f"{detail}; {more}" if detail else more])
     rows.sort(key=lambda r: r[0])
     return rows
