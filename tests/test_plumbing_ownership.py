@@ -113,3 +113,39 @@ def test_the_run_that_made_the_journal_never_opens_its_name_again(tmp_path, monk
     monkeypatch.undo()
     assert j.entries() == ["from_the_copy.png", "a.txt", "b.txt"]
     j.close()
+
+
+@pytest.mark.parametrize("planted", ["symlink", "hardlink", "new_file", "none"])
+def test_an_adopted_journal_is_appended_to_only_while_it_is_the_runs(tmp_path, planted):
+    """A helper process journals by name (``adopted``: it did not create the journal). A link
+    or another file planted under that name: the claim fails, the file outside the output is
+    untouched and nothing is created (opened without following a link, never with O_CREAT,
+    written only while its device and inode are the journal the run created)."""
+    from flexlift.plumbing.marker import adopted, claim
+
+    outside = tmp_path / "outside.txt"
+    outside.write_text("the user's\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    run = Journal(out).start()  # the run's own (held open: its inode cannot be reused)
+    try:
+        if planted != "none":
+            os.unlink(out / JOURNAL)
+        if planted == "symlink":
+            os.symlink(outside, out / JOURNAL)
+        elif planted == "hardlink":
+            os.link(outside, out / JOURNAL)
+        elif planted == "new_file":
+            (out / JOURNAL).write_text('"a.txt"\n')
+        with adopted([(str(out), list(run.ident))]):
+            if planted == "none":  # the journal itself: appended to
+                claim(out / "x.txt")
+                assert (out / JOURNAL).read_text() == '"x.txt"\n'
+            else:
+                with pytest.raises(OSError):
+                    claim(out / "x.txt")
+    finally:
+        run.close()
+    assert outside.read_text() == "the user's\n"
+    if planted == "new_file":
+        assert (out / JOURNAL).read_text() == '"a.txt"\n'
