@@ -285,3 +285,47 @@ def test_cli_simulate_exits_0_or_one_line_2(capsys, data):
         p.write_text(yaml.safe_dump(data), encoding="utf-8")
         rc, out, err = _run(capsys, ["simulate", str(p), "--duration", "20", "--json"])
         _check_cli(rc, out, err, p)
+
+
+# --------------------------------------------------------------------------- the checksum's YAML
+_TEXT = st.text(st.sampled_from("ab yes: 'x\"\n\t#-?{}[]é\u2028"), max_size=120)
+_SCALAR = st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6),
+                    st.floats(allow_nan=False), _TEXT)
+_KEY = st.one_of(st.sampled_from(["lift", "bags", "yes", "null", "a b", "x:", "1", "ok_2"]), _TEXT)
+_JSON = st.recursive(_SCALAR, lambda inner: st.one_of(
+    st.lists(inner, max_size=4), st.dictionaries(_KEY, inner, max_size=4)), max_leaves=20)
+
+
+@settings(max_examples=400, derandomize=True, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.dictionaries(_KEY, st.one_of(st.dictionaries(_KEY, _JSON, max_size=5), _JSON),
+                       max_size=5),
+       st.floats(-1e6, 1e6), st.text(st.sampled_from("ab \n'"), max_size=200))
+def test_the_checksums_yaml_put_together_from_its_entries_is_the_whole_dump(data, x, note):
+    """:func:`dump_sections` (the scenario checksum's text, built from each section's and each
+    section key's YAML kept alone) is :func:`dump_yaml`'s text of the whole, for any JSON data:
+    long text PyYAML breaks at its line width, multi-line and quoted text, keys it quotes;
+    and again with one key of a section changed, and a long note added beside it (the kept
+    entries reused)."""
+    from flexlift.scenario.file import dump_sections, dump_yaml
+
+    assert dump_sections(data) == dump_yaml(data)
+    data = {**data, "lift": {**(data.get("lift") if isinstance(data.get("lift"), dict) else {}),
+                             "breakout_factor": x, "note": note}}
+    assert dump_sections(data) == dump_yaml(data)
+
+
+def test_the_checksums_yaml_of_long_and_multi_line_text_is_the_whole_dump():
+    """The text PyYAML breaks (a long plain, single- or double-quoted scalar, at its line
+    width counted from the margin, so one level down it breaks elsewhere) and multi-line text:
+    put together from the entries or dumped whole, the same text as the whole dump."""
+    from flexlift.scenario.file import _SECTIONS, dump_sections, dump_yaml
+
+    texts = ["word " * 30 + "end", "tab\t" * 30, "it's " * 30, "é " * 60, "line\n" * 5,
+             "a" * 74 + " bb", "a" * 76 + " b", "x" * 200]
+    texts += ["w " * n + "end" for n in range(30, 42)]
+    for text in texts:
+        for data in ({"lift": {"note": text, "k": 1.5}}, {"lift": {"bags": [{"name": text}]}},
+                     {"name": text, "gas": {"note": text}}):
+            _SECTIONS.clear()
+            assert dump_sections(data) == dump_yaml(data), text

@@ -202,34 +202,35 @@ def event_list(run) -> list[dict]:
     return sorted(out, key=lambda e: e["time_s"])
 
 
-def snapshots(run) -> dict:
-    """The strength snapshots of a run, stacked over time (copies), by name."""
+def snapshots(run, own=np.copy) -> dict:
+    """The strength snapshots of a run, stacked over time, by name (``own`` of each: copies,
+    or ``np.asarray`` for views of the run's record)."""
     rec = run.recorder
     n = int(rec.counts[1])
-    return {"t": rec.snap_t[:n].copy(), "q": rec.snap_q[:n].copy(), "v": rec.snap_v[:n].copy(),
-            "a": rec.snap_a[:n].copy(), "H": rec.snap_H[:n].copy(), "sep": rec.snap_sep[:n].copy(),
-            "V": rec.snap_V[:n].copy(), "attached": rec.snap_attached[:n].copy(),
-            "current": rec.snap_current[:n].copy(), "noise": rec.snap_noise[:n].copy()}
+    return {name: own(getattr(rec, f"snap_{name}")[:n])
+            for name in ("t", "q", "v", "a", "H", "sep", "V", "attached", "current", "noise")}
 
 
 def build_result(run, error: str | None, summary_only: bool = False) -> Result:
     """The Dataset of a finished (or failed) run (``summary_only``: the same arrays and
-    attributes in a :class:`Frame`, no Dataset)."""
+    attributes in a :class:`Frame`, no Dataset; its time series are views of the run's record,
+    not copies: a summary reads a few of them once, and the record is the run's own)."""
     from flexlift.ascent.strength import seabed_profile, strength
     from flexlift.physics.gas import buoyancy
 
     P, rec, R = run.plant, run.recorder, run.state
+    own = np.asarray if summary_only else np.copy
     nrow = int(rec.counts[0])
-    t = rec.t[:nrow].copy()
+    t = own(rec.t[:nrow])
     coords = {"time": ("time", t, {"units": "s", "long_name": "time since filling began"}),
               "bag": ("bag", list(P.names))}
     data = {}
     for j, (name, (unit, long)) in enumerate(BAG_VARS.items()):
-        data[name] = (("time", "bag"), rec.bag[:nrow, j, :].copy(), {"units": unit, "long_name": long})
+        data[name] = (("time", "bag"), own(rec.bag[:nrow, j, :]), {"units": unit, "long_name": long})
     data["buoyancy"] = (("time", "bag"), buoyancy(rec.bag[:nrow, 5, :], P.bags.rho_g),
                         {"units": "N", "long_name": "buoyancy of the bag's gas, rho g V"})
     for j, (name, (unit, long)) in enumerate(HULL_VARS.items()):
-        data[name] = (("time",), rec.hull[:nrow, j].copy(), {"units": unit, "long_name": long})
+        data[name] = (("time",), own(rec.hull[:nrow, j]), {"units": unit, "long_name": long})
     per_bag = {"bag_x": (P.x_point, "m", "bag point from the aft end"),
                "arrival_time": (R.arrival, "s", "first time within tolerance of the target"),
                "gas_vented": (R.vented, "m3", "gas spilled, vented or leaked, at local pressure"),
@@ -245,7 +246,7 @@ def build_result(run, error: str | None, summary_only: bool = False) -> Result:
     data["bag_kind"] = (("bag",), np.array(["external" if e else "internal" for e in P.external]),
                         {"units": "1", "long_name": "external parachute or internal cylindrical"})
     Mmax = Vmax = None
-    snaps = snapshots(run)
+    snaps = snapshots(run, own)
     if snaps["t"].size and P.kind == "coupled":
         xg, Vs, Ms = strength(P, snaps)
         coords["x"] = ("x", xg, {"units": "m", "long_name": "position from the aft end"})

@@ -40,6 +40,14 @@ def _tanker():
     return load_scenario("tanker")
 
 
+@lru_cache(maxsize=1)
+def _defaults():
+    """Every key at its generic default (a scenario built without validation; read only)."""
+    from flexlift.scenario.schema import Scenario
+
+    return Scenario.model_construct()
+
+
 def _value(model, dotted: str):
     node = model
     for part in dotted.split("."):
@@ -55,10 +63,7 @@ def source(scenario, dotted: str) -> str:
     if scenario.name == "tanker" or not own_structure(scenario):
         same = _value(scenario, dotted) == _value(_tanker(), dotted)
         return "paper" if same else "user"
-    from flexlift.scenario.schema import Scenario
-
-    if set_in(scenario, dotted) and _value(scenario, dotted) != _value(Scenario.model_construct(),
-                                                                      dotted):
+    if set_in(scenario, dotted) and _value(scenario, dotted) != _value(_defaults(), dotted):
         return "user"
     return "default"
 

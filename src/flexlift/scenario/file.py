@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import re
+from functools import lru_cache
 from pathlib import Path
 
 import yaml
@@ -73,35 +74,65 @@ def dump_yaml(data) -> str:
     return yaml.dump(data, Dumper=_FastDumper, sort_keys=False)
 
 
-#: sections' YAML kept per process by :func:`dump_sections` (a sweep's cases differ from their
-#: base in a few sections; the checksum re-dumped every section: about 2 ms of a case)
+#: entries' YAML kept per process by :func:`dump_sections` (a sweep's cases differ from their
+#: base in a few keys; the checksum re-dumped every section, about 2 ms of a case, and then the
+#: sections a case changes, ~1.2 ms of the tanker's: its lift section holds the bags)
 SECTIONS_KEPT = 256
 _SECTIONS: dict[str, str] = {}
+#: PyYAML's line width (its emitter's ``best_width``) and block indent
+_WIDTH, _INDENT = 80, 2
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
 def dump_sections(data: dict) -> str:
     """:func:`dump_yaml` of a JSON-ready mapping (a scenario's ``model_dump(mode="json")``),
-    the same text, each top-level entry dumped on its own and kept by its JSON: a block
-    mapping at the top level is its entries' lines one after another, each written alone
-    the same way. Where the text could differ, the whole is dumped: an empty mapping, values
-    that share an object (YAML would write an anchor and an alias across entries), a value
-    not of JSON's types (a tuple's JSON is a list's)."""
+    the same text, built from entries dumped on their own and kept by their JSON
+    (:func:`_entry`). Where the text could differ, the whole is dumped: an empty mapping,
+    values that share an object (YAML would write an anchor and an alias across entries), a
+    value not of JSON's types (a tuple's JSON is a list's)."""
     if not data or not isinstance(data, dict) or not _plain(data):
         return dump_yaml(data)
-    parts = []
-    for key, value in data.items():
-        try:
-            ident = json.dumps([key, value])
-        except (TypeError, ValueError):  # not JSON-ready: no key to keep it by
-            return dump_yaml(data)
-        text = _SECTIONS.get(ident)
-        if text is None:
-            text = dump_yaml({key: value})
-            _SECTIONS[ident] = text
-            while len(_SECTIONS) > SECTIONS_KEPT:
-                _SECTIONS.pop(next(iter(_SECTIONS)))
-        parts.append(text)
-    return "".join(parts)
+    try:
+        return "".join(_entry(key, value, True) for key, value in data.items())
+    except (TypeError, ValueError):  # not JSON-ready: no key to keep it by
+        return dump_yaml(data)
+
+
+def _entry(key, value, top: bool) -> str:
+    """The YAML of the one-entry mapping ``{key: value}`` (:func:`dump_yaml`'s text), kept by
+    its JSON. A block mapping is its entries' lines one after another, each written alone the
+    same way; one level down (``top``: a section's own keys) each line of an entry written
+    alone is the same line indented by two spaces, so a section that is a non-empty mapping
+    is put together from its keys' texts (a case that changes one key of the lift dumps that
+    key, not the bags beside it). Only where that holds for certain: a plain key, and every
+    line of every key's text within the line width less the indent (PyYAML breaks a long
+    scalar at a width counted from the margin) with no blank line (a multi-line scalar's
+    breaks); otherwise the section is dumped whole."""
+    ident = json.dumps([key, value])
+    text = _SECTIONS.pop(ident, None)
+    if text is not None:  # kept, and now the most recently used
+        _SECTIONS[ident] = text
+        return text
+    if (top and isinstance(value, dict) and value and isinstance(key, str) and _NAME.match(key)
+            and all(isinstance(k, str) for k in value)):
+        lines = [part[:-1].split("\n") for part in (_entry(k, v, False)
+                                                      for k, v in value.items())]
+        if (all(line and len(line) <= _WIDTH - _INDENT for part in lines for line in part)
+                and _as_itself(key)):
+            text = f"{key}:\n" + "".join(" " * _INDENT + line + "\n"
+                                          for part in lines for line in part)
+    if text is None:
+        text = dump_yaml({key: value})
+    _SECTIONS[ident] = text
+    while len(_SECTIONS) > SECTIONS_KEPT:
+        _SECTIONS.pop(next(iter(_SECTIONS)))
+    return text
+
+
+@lru_cache(maxsize=64)
+def _as_itself(key: str) -> bool:
+    """Whether YAML writes the mapping key ``key`` as it is (not quoted: ``yes``, ``null``)."""
+    return dump_yaml({key: 0}) == f"{key}: 0\n"
 
 
 def _plain(data) -> bool:
