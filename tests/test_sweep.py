@@ -137,6 +137,51 @@ def test_reused_plants_are_the_plants_a_fresh_build_gives(tanker):
     assert memo.get(line, build)[0] is pl and memo.hits == 1
 
 
+def test_a_kept_geometry_serves_the_cases_that_change_the_gas_the_hold_or_the_factor(tanker):
+    """A case that changes the breakout factor (a new plan: its required lift), the valves or
+    the breakout time gets a plant built on the kept geometry, equal array for array to a
+    fresh build; one that changes what the geometry reads (the damping, the pinned bags'
+    points) gets a new geometry; and the geometry reads of the plan only what the reuse
+    compares (GEOMETRY_READS)."""
+    from flexlift.ascent.plant import GEOMETRY_READS, coupled_plant, plant_geometry
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.structure.hull import hull_from_scenario
+    from flexlift.sweep import plants
+
+    def same(a, b):
+        for name, record in a.records._asdict().items():
+            for f in record._fields:
+                assert np.array_equal(np.asarray(getattr(record, f)),
+                                      np.asarray(getattr(getattr(b, name), f))), (name, f)
+
+    bags = [{"name": f"p{i}", "kind": "external", "x_m": x, "lift_t": 600.0}
+            for i, x in enumerate((10.0, 30.0, 50.0, 68.0))]
+    base = tanker.with_changes(**{"lift.bags": bags})
+    plants.plant_for(base, "coordinated")
+    for change, reused in (({"lift.breakout_factor": 1.31}, True),
+                           ({"gas.purge_rate_max_m3_s": 1.7, "seabed.breakout_time_s": 250.0},
+                            True),
+                           ({"lift.breakout_factor": 1.2, "gas.fill_rate_max_m3_s": 0.45}, True),
+                           ({"hull.modal_damping": 0.03}, False),
+                           ({"lift.bags": [{**b, "x_m": b["x_m"] + 1.0} for b in bags]}, False)):
+        s = base.with_changes(**change)
+        before = plants.stats()["geometry"]
+        same(plants.plant_for(s, "coordinated"), coupled_plant(s))
+        after = plants.stats()["geometry"]
+        assert (after["hits"] - before["hits"], after["misses"] - before["misses"]) == (
+            (1, 0) if reused else (0, 1)), change
+    read = set()
+    plan = plan_lift(base, hull_from_scenario(base))
+
+    class Recording:
+        def __getattr__(self, name):
+            read.add(name)
+            return getattr(plan, name)
+
+    plant_geometry(base, hull_from_scenario(base), Recording())
+    assert read == set(GEOMETRY_READS)
+
+
 def test_reused_modes_are_the_modes_of_the_same_beam(tanker_hull):
     from flexlift.structure.beam import assemble
     from flexlift.structure.modes import compute_modes, reusing_modes

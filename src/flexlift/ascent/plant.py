@@ -238,14 +238,31 @@ class Holding:
     stern_bow: tuple[float, float]
 
 
-def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = None) -> Plant:
-    """The coupled plant of ``scenario``: the wet hull, its bags and its holding groups (one,
-    or one per stage of a staged lift: :func:`holding_groups`)."""
-    env = scenario.environment
-    hull = hull or hull_from_scenario(scenario)
-    if plan is None:
-        plan = plan_lift(scenario, hull)
-    rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
+@dataclass(frozen=True)
+class Geometry:
+    """What the coupled plant of a hull and a lift plan is built on, whatever the gas and the
+    seabed's hold and breakout time (:func:`plant_geometry`): the hull, the extra moving mass
+    per length of the wet beam [kg/m], its modes (all computed) and the ``nr`` retained, the
+    strips and bag points on them, the holding groups, and the modal and strip records."""
+
+    hull: Hull
+    mass_line: float | np.ndarray
+    modes: Modes
+    nr: int
+    lay: Layout
+    hold: Holding
+    modal: Modal
+    strips: Strips
+
+
+#: what :func:`plant_geometry` reads of a lift plan (a sweep's worker reuses a geometry for a
+#: plan the same in these; a test holds the function to them)
+GEOMETRY_READS = ("bags", "wet_weight")
+
+
+def plant_geometry(scenario, hull: Hull, plan: LiftPlan) -> Geometry:
+    """The :class:`Geometry` of ``scenario``'s coupled plant on ``hull`` and ``plan`` (of
+    which it reads :data:`GEOMETRY_READS` only)."""
     beam, mass_line = wet_beam(scenario, hull)
     # the retained modes plus 10 more for the static correction of the eliminated ones (their
     # share falls as 1 / omega^2); all of them on the tanker's 11 elements
@@ -255,18 +272,35 @@ def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = No
     nr = min(2 + n_flex, modes.n_modes)
     lay = layout(scenario, hull, plan, modes)
     hold = holding(scenario, hull, plan, lay)
+    return Geometry(hull=hull, mass_line=mass_line, modes=modes, nr=nr, lay=lay, hold=hold,
+                    modal=modal_record(scenario, hull, modes, nr, lay),
+                    strips=strip_record(scenario, hull, nr, lay, hold))
+
+
+def coupled_plant(scenario, hull: Hull | None = None, plan: LiftPlan | None = None,
+                  geometry: Geometry | None = None) -> Plant:
+    """The coupled plant of ``scenario``: the wet hull, its bags and its holding groups (one,
+    or one per stage of a staged lift: :func:`holding_groups`). ``geometry``: its
+    :func:`plant_geometry` on ``plan`` when already built (a sweep's worker keeps it for the
+    cases that change only the gas, the seabed's hold or the loads); it holds the hull."""
+    env = scenario.environment
+    hull = geometry.hull if geometry is not None else hull or hull_from_scenario(scenario)
+    if plan is None:
+        plan = plan_lift(scenario, hull)
+    rho, g = env.seawater_density_kg_m3, env.gravity_m_s2
+    geo = geometry or plant_geometry(scenario, hull, plan)
+    modes, nr, lay, hold = geo.modes, geo.nr, geo.lay, geo.hold
     bags = plan.bags
     return Plant(kind="coupled", names=tuple(b.name for b in bags), external=lay.external,
                  x_point=lay.x_point, spans=tuple(b.span for b in bags),
                  neutral_volume=neutral_volumes(lay.external, lay.capacity, hold.W_g, rho * g,
                                                 hold.bag_group),
-                 strip_x=lay.xs, strip_element=lay.el,
-                 modal=modal_record(scenario, hull, modes, nr, lay),
-                 strips=strip_record(scenario, hull, nr, lay, hold),
+                 strip_x=lay.xs, strip_element=lay.el, modal=geo.modal, strips=geo.strips,
                  bags=bag_record(scenario, hull, modes, nr, lay, hold),
                  seabed=seabed_record(scenario, plan, nr, lay, hold), hull=hull, modes=modes,
                  plan=plan,
-                 mass_line=mass_line, wet_weight=plan.wet_weight, hold_stern_bow=hold.stern_bow,
+                 mass_line=geo.mass_line, wet_weight=plan.wet_weight,
+                 hold_stern_bow=hold.stern_bow,
                  gravity=g, seawater_density=rho, steel_density=env.steel_density_kg_m3)
 
 

@@ -18,6 +18,7 @@ least-recently-used.
 
 from __future__ import annotations
 
+import pickle
 import threading
 from collections import OrderedDict
 
@@ -95,10 +96,11 @@ class ReadMemo:
         self._lock = threading.Lock()
         self.hits = self.misses = 0
 
-    def get(self, scenario, build):
+    def get(self, scenario, build, salt=None):
         """``build(view)`` -> (result, extra keys), computed on a recording view of
-        ``scenario`` unless a kept result was built from the same values; returns (result,
-        the keys it depends on)."""
+        ``scenario`` unless a kept result was built from the same values (and the same
+        ``salt``: what else the build reads, compared by equality); returns (result, the keys
+        it depends on)."""
         with self._lock:
             groups = list(self._groups.items())
         seen: dict[str, object] = {}  # each key's value read once (a miss reads them again)
@@ -107,7 +109,7 @@ class ReadMemo:
             for k in keys:
                 if k not in seen:
                     seen[k] = _value(scenario, k)
-            return tuple(seen[k] for k in keys)
+            return tuple(seen[k] for k in keys) + (salt,)
 
         for keys, kept in groups:
             values = values_of(keys)
@@ -138,16 +140,29 @@ class ReadMemo:
         return list(self._groups)
 
 
-_PLANS, _PLANTS, _PAPER = ReadMemo(), ReadMemo(), ReadMemo()
+_PLANS, _PLANTS, _PAPER, _GEOMETRY = ReadMemo(), ReadMemo(), ReadMemo(), ReadMemo()
 #: the dry and wet modes of the plans and plants (:func:`~flexlift.structure.modes.reusing_modes`)
 _MODES: dict = {}
 
 
+def plan_salt(plan) -> bytes:
+    """What a plant's geometry reads of a lift plan (:data:`~flexlift.ascent.plant.
+    GEOMETRY_READS`: the bags and the wet weight, not the required lift, the modelled lift
+    per bag or the warnings, which the scenario's ``lift.breakout_factor`` changes), as
+    bytes compared exactly."""
+    from flexlift.ascent.plant import GEOMETRY_READS
+
+    return pickle.dumps(tuple(getattr(plan, name) for name in GEOMETRY_READS), protocol=5)
+
+
 def plant_for(scenario, mode: str):
     """The plant ``simulate(scenario, control=mode)`` would build (the paper's in paper mode,
-    else the coupled one), reused when it can be."""
+    else the coupled one), reused when it can be; else built on the kept geometry of the same
+    hull and plan when there is one (the modes, strips and bag points: a case that changes the
+    gas, the seabed's hold or the breakout factor rebuilds only the bags' and the seabed's
+    records)."""
     from flexlift.ascent.paper import paper_plant
-    from flexlift.ascent.plant import coupled_plant
+    from flexlift.ascent.plant import coupled_plant, plant_geometry
     from flexlift.loads.liftplan import plan_lift
     from flexlift.structure.hull import hull_from_scenario
     from flexlift.structure.modes import reusing_modes
@@ -155,15 +170,23 @@ def plant_for(scenario, mode: str):
     with reusing_modes(_MODES):
         plan, plan_keys = _PLANS.get(scenario,
                                      lambda v: (plan_lift(v, hull_from_scenario(v)), ()))
+        geometry, geo_keys = _GEOMETRY.get(
+            scenario, lambda v: (plant_geometry(v, hull_from_scenario(v), plan), ()),
+            salt=plan_salt(plan))
+
+        def coupled(v):
+            return coupled_plant(v, plan=plan, geometry=geometry)
+
         if mode == "paper":
-            return _PAPER.get(scenario, lambda v: (paper_plant(v, coupled_plant(v, plan=plan)),
-                                                   plan_keys))[0]
-        return _PLANTS.get(scenario, lambda v: (coupled_plant(v, plan=plan), plan_keys))[0]
+            return _PAPER.get(scenario, lambda v: (paper_plant(v, coupled(v)),
+                                                   plan_keys + geo_keys))[0]
+        return _PLANTS.get(scenario, lambda v: (coupled(v), plan_keys + geo_keys))[0]
 
 
 def stats() -> dict:
     """Hits and misses of this process's caches (for the benchmark)."""
     out = {name: {"hits": m.hits, "misses": m.misses}
-           for name, m in (("plans", _PLANS), ("plants", _PLANTS), ("paper", _PAPER))}
+           for name, m in (("plans", _PLANS), ("plants", _PLANTS), ("paper", _PAPER),
+                           ("geometry", _GEOMETRY))}
     out["modes_kept"] = len(_MODES)
     return out
