@@ -153,6 +153,33 @@ def test_the_command_line_refuses_in_one_line_with_exit_2(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+def test_bad_input_stops_the_workers_fork_server_the_command_started(tmp_path, capsys,
+                                                                    monkeypatch):
+    """``flexlift sweep`` starts its workers' fork server before it reads its input; when the
+    input is refused (exit 2) the server is stopped with the command, not left to finish its
+    preload (on a new machine, two minutes compiling the loop) in the background."""
+    import os
+    from multiprocessing import forkserver
+
+    from flexlift.sweep import executors
+
+    started, real = [], executors.start_forkserver
+
+    def recording():
+        ctx = real()
+        started.append(forkserver._forkserver._forkserver_pid)
+        return ctx
+
+    monkeypatch.setattr(executors, "start_forkserver", recording)
+    assert main(["sweep", "--workers", "2", "--study", "volcano", "tanker",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert "unknown study" in capsys.readouterr().err
+    assert started and started[0] is not None and set(started) == {started[0]}  # one server
+    assert forkserver._forkserver._forkserver_pid is None
+    with pytest.raises(ProcessLookupError):  # gone, and reaped
+        os.kill(started[0], 0)
+
+
 def test_a_study_runs_and_its_report_has_the_sources_and_the_convergence(tmp_path):
     spec = parse_spec(study(samples=3))
     res = run_sweep(spec, tmp_path / "o", engine=Serial())

@@ -70,9 +70,17 @@ def main(argv: list[str] | None = None) -> int:
     words = sys.argv[1:] if argv is None else list(argv)
     command = next((w for w in words if not w.startswith("-")), None)  # no global option takes a value
     if command in ("sweep", "contingency"):
-        from flexlift.sweep.executors import start_early  # the workers warm up meanwhile
+        from flexlift.sweep import executors
 
-        start_early(words)
+        executors.start_early(words)  # the workers warm up meanwhile
+        code = _main(argv, command)
+        if code != 0:  # no result: the workers' server stops with the command
+            executors.stop_forkserver()
+        return code
+    return _main(argv, command)
+
+
+def _main(argv: list[str] | None, command: str | None) -> int:
     parser = build_parser(command)
     try:
         args = parser.parse_args(argv)

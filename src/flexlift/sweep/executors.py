@@ -91,6 +91,24 @@ def start_early(argv: list[str]) -> None:
             start_forkserver()
 
 
+def stop_forkserver() -> None:
+    """Stop this process's fork server now, if it runs, even inside its preload (which can
+    compile the loop for two minutes on a new machine, and reads its stop signal only after
+    it): SIGTERM, then reaped. For a command that ends without a result (bad input, an
+    interruption): nothing it started goes on working after it. A later sweep in this
+    process starts a new server."""
+    from multiprocessing import forkserver
+
+    server = forkserver._forkserver
+    pid = getattr(server, "_forkserver_pid", None)
+    if pid is None:
+        return
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, signal.SIGTERM)
+    with contextlib.suppress(Exception):  # closes its pipe, reaps it, forgets it
+        server._stop()
+
+
 class SchedulerLost(RuntimeError):
     """The Dask scheduler went away during a sweep (killed, or its machine lost)."""
 
