@@ -294,6 +294,14 @@ def test_events_of_a_cluster_merge_into_one_row(hundred):
     assert event_rows(Result(ds)) == [
         [900.0, "bag_rupture", one, "leak_time_s 5"],
         [950.0, "sensor_freeze", other, "1 bag, 2 events, the last at 990.0 s"]]
+    # every bag arriving in the same step, the bow's first in the log: one row per lift
+    # point, after the structure's event at that time, aft to bow
+    ds.attrs["events"] = json.dumps(
+        [{"time_s": 2000.0, "kind": "arrival", "bag": b} for b in reversed(bags)]
+        + [{"time_s": 2000.0, "kind": "liftoff", "bag": None}])
+    rows = event_rows(Result(ds))
+    assert rows[0][:3] == [2000.0, "liftoff", ""]
+    assert [r[2] for r in rows[1:]] == [p.label for p in sorted(points, key=lambda p: p.x)]
 
 
 def test_results_nc_modes_with_other_bags_and_no_strength_grid(tanker, tmp_path):

@@ -121,3 +121,23 @@ def test_a_bag_flexlift_chose_says_so():
     s = parse_scenario({"based_on": "tanker", "defaulted": {"lift.catalogue_bag": "derived"},
                         "lift": {"catalogue_bag": {"model": "open_parachute_20t"}}})
     assert _catalogue_rows(s)[0]["note"].startswith("chosen by flexlift")
+
+
+def test_a_bag_given_by_its_lift_alone_is_called_the_papers_cylinder_not_sized_for_it():
+    """``lift.catalogue_bag: {lift_t: 10}`` keeps the rest of the bag at the paper's 565 t
+    cylinder (1.5 m x 18 m, 2.8 bar): the design basis says so and how to give a real bag;
+    a bag given with its body, or named from the catalogue, or the tanker's own, does not."""
+    from flexlift.scenario.basis import _catalogue_rows
+    from flexlift.scenario.schema import parse_scenario
+
+    def note(bag):
+        s = parse_scenario({"based_on": "tanker", "lift": {"catalogue_bag": bag}})
+        return _catalogue_rows(s)[0]["note"]
+
+    alone = note({"lift_t": 10.0})
+    assert ("only its lift given" in alone and "1.5 m x 18 m, 2.8 bar" in alone
+            and "not sized for 10 t" in alone and "lift.catalogue_bag.model" in alone), alone
+    for given in ({"lift_t": 10.0, "type": "open_parachute", "diameter_m": 2.2,
+                   "length_m": 3.3}, {"model": "open_parachute_20t"}, {"lift_t": 565.0}):
+        assert "only its lift given" not in note(given), given
+    assert "only its lift given" not in _catalogue_rows(load_scenario("tanker"))[0]["note"]

@@ -137,6 +137,26 @@ def test_reused_plants_are_the_plants_a_fresh_build_gives(tanker):
     assert memo.get(line, build)[0] is pl and memo.hits == 1
 
 
+def test_a_kept_results_key_tells_apart_what_a_build_could_tell_apart(tanker):
+    """The plant caches compare each key's value exactly: a section or list of bags by its
+    values' pickle, so one bag's float changed in its last bit, -0.0 for 0.0, 1 for 1.0 and
+    None for a value are other keys; the same values are the same key."""
+    from flexlift.sweep.plants import _canonical, _value
+
+    bags = [{"name": f"p{i}", "kind": "external", "x_m": x, "lift_t": 600.0}
+            for i, x in enumerate((10.0, 30.0))]
+    base = tanker.with_changes(**{"lift.bags": bags})
+    key = _value(base, "lift.bags")
+    assert key == _value(tanker.with_changes(**{"lift.bags": [dict(b) for b in bags]}),
+                         "lift.bags")
+    nudged = [bags[0], {**bags[1], "x_m": float(np.nextafter(30.0, 31.0))}]
+    for other in (nudged, [bags[0], {**bags[1], "lift_t": None}]):
+        assert _value(tanker.with_changes(**{"lift.bags": other}), "lift.bags") != key
+    assert _canonical(-0.0) != _canonical(0.0) and _canonical(1) != _canonical(1.0)
+    assert _value(base, "lift") != _value(base.with_changes(
+        **{"lift.breakout_factor": float(np.nextafter(base.lift.breakout_factor, 2.0))}), "lift")
+
+
 def test_a_kept_geometry_serves_the_cases_that_change_the_gas_the_hold_or_the_factor(tanker):
     """A case that changes the breakout factor (a new plan: its required lift), the valves or
     the breakout time gets a plant built on the kept geometry, equal array for array to a

@@ -60,28 +60,34 @@ def point_tables(result, mode: str) -> tuple[Table, Table]:
 def event_rows(result) -> list[list]:
     """The events as table rows (time [s], kind, bag, detail), those of one kind on the bags
     of one lift point merged into one row at the first of them ("8 bags, the last at 3446.0 s");
-    an event of one bag alone (a fault on it) names that bag."""
+    an event of one bag alone (a fault on it) names that bag. Rows in time order, those at
+    the same time the structure's first, then aft to bow by their lift points (ten points
+    arriving in the same step read in order along the hull)."""
     points = lift_points(result.dataset)
-    where = {b: p for p in points for b in p.bags}
+    point_of = {b: p for p in points for b in p.bags}
     merged: dict[tuple, list[dict]] = {}
-    rows = []
+    keyed = []  # ((time, x of the lift point, -inf for the structure's), row)
     for e in result.events:
-        p = where.get(e["bag"]) if e["bag"] else None
+        p = point_of.get(e["bag"]) if e["bag"] else None
         if p is None or p.count == 1:
-            rows.append([e["time_s"], e["kind"], e["bag"] or "", e.get("detail", "")])
+            x = p.x if p is not None else -np.inf
+            keyed.append(((e["time_s"], x), [e["time_s"], e["kind"], e["bag"] or "",
+                                             e.get("detail", "")]))
             continue
         merged.setdefault((e["kind"], p.label, e.get("detail", "")), []).append(e)
     for (kind, label, detail), es in merged.items():
         times = [e["time_s"] for e in es]
         names = {e["bag"] for e in es}
+        x = point_of[es[0]["bag"]].x
         if len(es) == 1:  # one bag of the point (a fault on it): that bag, as it is
             e = es[0]
-            rows.append([e["time_s"], kind, e["bag"], detail])
+            keyed.append(((e["time_s"], x), [e["time_s"], kind, e["bag"], detail]))
             continue
         n = len(names)
         count = f"{n} bag{'s' if n > 1 else ''}, {len(es)} events" if n < len(es) else f"{n} bags"
         more = f"{count}, the last at {max(times):.1f} s"
-        where = next(iter(names)) if n == 1 else label  # one bag's events: that bag
-        rows.append([min(times), kind, where, f"{detail}; {more}" if detail else more])
-    rows.sort(key=lambda r: r[0])
-    return rows
+        name = next(iter(names)) if n == 1 else label  # one bag's events: that bag
+        keyed.append(((min(times), x), [min(times), kind, name,
+                                        f"{detail}; {more}" if detail else more]))
+    keyed.sort(key=lambda kr: kr[0])
+    return [row for _, row in keyed]

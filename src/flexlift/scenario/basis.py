@@ -105,6 +105,17 @@ def _catalogue_rows(scenario) -> list[dict]:
     if (scenario.defaulted or {}).get("lift.catalogue_bag") == "derived":
         note = ("chosen by flexlift (no bag given): "
                 + POLICY["lift.catalogue_bag"][1] + (f"; {note}" if note else ""))
+    body = ("type", "diameter_m", "length_m", "working_pressure_bar")
+    if (bag.model is None and set_in(scenario, "lift.catalogue_bag.lift_t")
+            and bag.lift_t != _defaults().lift.catalogue_bag.lift_t
+            and not any(set_in(scenario, f"lift.catalogue_bag.{f}") for f in body)):
+        # a lift alone: the rest of the bag is still the paper's 565 t cylinder's
+        only = (f"only its lift given: its type and body are the paper's "
+                f"{bag.type.replace('_', ' ')}'s ({bag.diameter_m:g} m x {bag.length_m:g} m, "
+                f"{_show(bag.working_pressure_bar, 'bar')}), not sized for {bag.lift_t:g} t; "
+                "name a catalogue bag (lift.catalogue_bag.model) or give its type and "
+                "dimensions")
+        note = f"{note}; {only}" if note else only
     dims = (f"{bag.type.replace('_', ' ')}, {bag.lift_t:g} t rated, {bag.diameter_m:g} m x "
             f"{bag.length_m:g} m, relief {_show(bag.relief_bar, 'bar')}, working pressure "
             f"{_show(bag.working_pressure_bar, 'bar')}, dump valve "

@@ -71,9 +71,12 @@ def _value(scenario, key: str):
 
 
 def _canonical(v):
-    """A value as a hashable, exactly comparable form (floats by their bits: -0.0 is not 0.0)."""
+    """A value as a hashable, exactly comparable form (floats by their bits: -0.0 is not 0.0;
+    a section, or each bag of a list of them, as the pickle of its values: floats as their
+    eight bytes, 1 not 1.0, None not NaN; a value shared twice inside it can only make two
+    equal sections compare unequal, a new build, never the reverse)."""
     if isinstance(v, BaseModel):
-        return ("model", type(v).__name__, _canonical(v.model_dump(mode="python")))
+        return ("model", type(v).__name__, pickle.dumps(v.model_dump(mode="python"), protocol=5))
     if isinstance(v, dict):
         return ("dict", tuple((k, _canonical(x)) for k, x in v.items()))
     if isinstance(v, list | tuple):
