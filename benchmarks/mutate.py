@@ -278,6 +278,16 @@ MUTATIONS = (
       "self.state.counters[1] &= ~(F_HELD | F_QUIET | F_HAVE_B)",
       "self.state.counters[1] &= ~F_QUIET",
       "a fault inside a held block leaves the block's mechanics frozen to its end"),
+    # ------------------------------------------------------------------ a case's Python
+    M("checksum-section-width", "scenario/file.py",
+      "len(line) <= _WIDTH - _INDENT", "len(line) <= 10**6",
+      "a section's YAML put together from its keys' texts however long their lines"),
+    M("geometry-salt-bags", "sweep/plants.py",
+      "for name in GEOMETRY_READS)", "for name in GEOMETRY_READS if name != \"bags\")",
+      "a kept plant geometry served to a plan whose bags differ"),
+    M("forkserver-left-running", "cli/__init__.py",
+      "            executors.stop_forkserver()\n", "            pass\n",
+      "a refused sweep leaves its workers' fork server running"),
 )
 
 
