@@ -278,6 +278,9 @@ MUTATIONS = (
       "self.state.counters[1] &= ~(F_HELD | F_QUIET | F_HAVE_B)",
       "self.state.counters[1] &= ~F_QUIET",
       "a fault inside a held block leaves the block's mechanics frozen to its end"),
+    M("free-strip-contact-skipped", "ascent/mechanics.py",
+      "        if held or ws < 0.0:\n", "        if held:\n",
+      "a free strip pressed into the seabed (a resettle, a touchdown) gets no contact"),
     # ------------------------------------------------------------------ a case's Python
     M("checksum-section-width", "scenario/file.py",
       "len(line) <= _WIDTH - _INDENT", "len(line) <= 10**6",

@@ -114,13 +114,20 @@ def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, activ
     for s in range(w.size):
         g = group[s]
         held = not sep[g]
-        ws, wvs, k, c = w[s], wv[s], stiffness[s], damping[s]
+        ws, wvs = w[s], wv[s]
         load = drag(wvs - current, coeff[s]) + noise[s]
         if not held:
             load -= H[g] * hold[s]
         line[s] = load
-        contact[s] = contact_load(ws, wvs, k, c, held)
-        active[s] = held or in_contact(ws, wvs, k, c)
+        if held or ws < 0.0:
+            k, c = stiffness[s], damping[s]
+            contact[s] = contact_load(ws, wvs, k, c, held)
+            active[s] = held or in_contact(ws, wvs, k, c)
+        else:  # free and above the seabed (the ascent): the one-sided law's zero, not
+            # evaluated (-0.0: added to a line load or a sum it changes nothing, as the
+            # law's q x 0 does)
+            contact[s] = -0.0
+            active[s] = False
         w_min = min(w_min, ws)
     return w_min
 
