@@ -37,6 +37,39 @@ def test_strength_closes_at_the_bow(short):
     assert np.abs(M[:, -1]).max() < 1e-5 * np.abs(M).max()
 
 
+def test_the_compiled_line_loads_are_the_arrays_expression(monkeypatch):
+    """The strength's weight, inertia, drag and seabed line loads, one compiled pass, are
+    numpy's expression of the same arrays bit for bit (signs of zero too), with the internal
+    bags' spans added after, on the tanker's short run and on a current (the drag on the
+    relative speed)."""
+    from flexlift.ascent import loop
+    from flexlift.ascent import result as R
+    from flexlift.ascent import strength as S
+    from flexlift.physics import hydro
+
+    runs = []
+    real = loop.build_result
+    monkeypatch.setattr(loop, "build_result", lambda run, *a: runs.append(run) or real(run, *a))
+    sc = load_scenario("tanker").with_changes(**{"seabed.breakout_time_s": 60.0})
+    simulate(sc, duration=400.0)
+    simulate(sc.with_changes(**{"disturbance.current_m_s": 0.3}), duration=400.0)
+    for run in runs:
+        P, snaps = run.plant, R.snapshots(run)
+        _, xe, _ = S.strength_grid(P)
+        G = S._Grid.of(P, xe)
+        acc, v = snaps["a"] @ G.psi.T, snaps["v"] @ G.psi.T
+        ref = -G.weight - G.mass * acc
+        ref += hydro.drag(v - snaps["current"][:, None], G.drag)
+        ref += S.seabed_loads(P, snaps)[:, G.cell] * G.spread
+        for i, span in enumerate(P.spans):  # the internal bags' buoyancy over their spans
+            if span is not None:
+                lift = S.gas.buoyancy(snaps["V"][:, i], P.bags.rho_g) * snaps["attached"][:, i]
+                cols = np.flatnonzero((xe >= span[0]) & (xe <= span[1]))
+                ref[:, cols] += (lift / (span[1] - span[0]))[:, None]
+        got = S.line_loads(P, xe, snaps, G)
+        assert np.array_equal(got, ref) and np.array_equal(np.signbit(got), np.signbit(ref))
+
+
 def test_netcdf_round_trip(short, tmp_path):
     path = save_netcdf(short, tmp_path / "r.nc")
     back = load_netcdf(path)

@@ -143,9 +143,9 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
     :func:`flexlift.ascent.result.snapshots`)."""
     G = grid or _Grid.of(plant, xe)
     v, acc = snaps["v"] @ G.psi.T, snaps["a"] @ G.psi.T
-    q = -G.weight - G.mass * acc
-    q += hydro.drag(v - snaps["current"][:, None], G.drag)
-    q += seabed_loads(plant, snaps)[:, G.cell] * G.spread
+    q = np.empty_like(v)
+    _weight_inertia_drag_seabed(G.weight, G.mass, acc, v, np.ascontiguousarray(
+        snaps["current"], dtype=float), G.drag, seabed_loads(plant, snaps), G.cell, G.spread, q)
     if np.any(snaps["noise"]):
         q += np.array([np.interp(xe, plant.strip_x, row) for row in snaps["noise"]])
     for i, span in enumerate(plant.spans):
@@ -156,6 +156,18 @@ def line_loads(plant, xe: np.ndarray, snaps: dict, grid: _Grid | None = None) ->
             cols = np.flatnonzero((xe >= span[0]) & (xe <= span[1]))
             q[:, cols] += (lift / (span[1] - span[0]))[:, None]
     return q
+
+
+@jit
+def _weight_inertia_drag_seabed(weight, mass, acc, v, current, coeff, bed, cell, spread, q):
+    """q (nt, nx) = -weight - mass acc + drag(v - current, coeff) + bed[:, cell] spread, each
+    value's operations in numpy's order for those arrays (the same numbers), in one pass
+    (the arrays' expressions made eight passes over the grid and their temporaries)."""
+    for r in range(q.shape[0]):
+        for j in range(q.shape[1]):
+            x = -weight[j] - mass[j] * acc[r, j]
+            x = x + hydro.drag(v[r, j] - current[r], coeff[j])
+            q[r, j] = x + bed[r, cell[j]] * spread[j]
 
 
 def seabed_loads(plant, snaps: dict) -> np.ndarray:
