@@ -102,24 +102,26 @@ def test_a_case_runs_as_flexlift_simulate_runs_it(tmp_path):
         assert got["headline"] == plain.headline and got["criteria"] == plain.criteria
 
 
+def _same_records(a, b):
+    """Two plants' loop records equal array for array."""
+    for name, record in a.records._asdict().items():
+        for f in record._fields:
+            assert np.array_equal(np.asarray(getattr(record, f)),
+                                  np.asarray(getattr(getattr(b, name), f))), (name, f)
+
+
 def test_reused_plants_are_the_plants_a_fresh_build_gives(tanker):
     from flexlift.ascent.paper import paper_plant
     from flexlift.ascent.plant import coupled_plant
     from flexlift.sweep import plants
-
-    def same(a, b):
-        for name, record in a.records._asdict().items():
-            for f in record._fields:
-                assert np.array_equal(np.asarray(getattr(record, f)),
-                                      np.asarray(getattr(getattr(b, name), f))), (name, f)
 
     before = plants.stats()["plants"]["hits"]
     for change in ({}, {"disturbance.current_m_s": 0.05}, {"control.breakout_pull_t": 120},
                    {"seabed.breakout_time_s": 300}, {"hydro.drag_coefficient": 1.0},
                    {"lift.breakout_factor": 1.31}, {"hull.modal_damping": 0.03}, {}):
         s = tanker.with_changes(**change)
-        same(plants.plant_for(s, "coordinated"), coupled_plant(s))
-    same(plants.plant_for(tanker, "paper"), paper_plant(tanker))
+        _same_records(plants.plant_for(s, "coordinated"), coupled_plant(s))
+    _same_records(plants.plant_for(tanker, "paper"), paper_plant(tanker))
     assert plants.stats()["plants"]["hits"] >= before + 3  # {} twice, current, pull
     # a plant of a pipeline (read from keys of its pipe section), then a tanker (no pipe)
     from flexlift.scenario import load_scenario
@@ -132,8 +134,8 @@ def test_reused_plants_are_the_plants_a_fresh_build_gives(tanker):
 
     pl, keys = memo.get(line, build)
     assert any(k.startswith("pipe.") for k in keys)
-    same(pl, coupled_plant(line))
-    same(memo.get(tanker, build)[0], coupled_plant(tanker))
+    _same_records(pl, coupled_plant(line))
+    _same_records(memo.get(tanker, build)[0], coupled_plant(tanker))
     assert memo.get(line, build)[0] is pl and memo.hits == 1
 
 
@@ -168,12 +170,6 @@ def test_a_kept_geometry_serves_the_cases_that_change_the_gas_the_hold_or_the_fa
     from flexlift.structure.hull import hull_from_scenario
     from flexlift.sweep import plants
 
-    def same(a, b):
-        for name, record in a.records._asdict().items():
-            for f in record._fields:
-                assert np.array_equal(np.asarray(getattr(record, f)),
-                                      np.asarray(getattr(getattr(b, name), f))), (name, f)
-
     bags = [{"name": f"p{i}", "kind": "external", "x_m": x, "lift_t": 600.0}
             for i, x in enumerate((10.0, 30.0, 50.0, 68.0))]
     base = tanker.with_changes(**{"lift.bags": bags})
@@ -186,7 +182,7 @@ def test_a_kept_geometry_serves_the_cases_that_change_the_gas_the_hold_or_the_fa
                            ({"lift.bags": [{**b, "x_m": b["x_m"] + 1.0} for b in bags]}, False)):
         s = base.with_changes(**change)
         before = plants.stats()["geometry"]
-        same(plants.plant_for(s, "coordinated"), coupled_plant(s))
+        _same_records(plants.plant_for(s, "coordinated"), coupled_plant(s))
         after = plants.stats()["geometry"]
         assert (after["hits"] - before["hits"], after["misses"] - before["misses"]) == (
             (1, 0) if reused else (0, 1)), change
