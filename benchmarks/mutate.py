@@ -281,6 +281,13 @@ MUTATIONS = (
     M("free-strip-contact-skipped", "ascent/mechanics.py",
       "        if held or ws < 0.0:\n", "        if held:\n",
       "a free strip pressed into the seabed (a resettle, a touchdown) gets no contact"),
+    M("still-hold-not-restarted", "ascent/kernel.py",
+      "    if state.counters[1] & F_STILL:\n        hold_start(plant, state, switches)\n",
+      "    if state.counters[1] & F_STILL:\n        pass\n",
+      "a quiet block's later inner steps step the hold from a stale start"),
+    M("still-never-cleared", "ascent/kernel.py",
+      "    state.counters[1] &= ~F_STILL\n", "",
+      "a quiet block's first inner step takes the state of the block before it"),
     # ------------------------------------------------------------------ a case's Python
     M("checksum-section-width", "scenario/file.py",
       "len(line) <= _WIDTH - _INDENT", "len(line) <= 10**6",

@@ -224,3 +224,53 @@ def test_a_fault_outside_a_block_changes_nothing_else():
     for name in ("height", "gas_volume", "contact_force"):
         np.testing.assert_array_equal(a.dataset[name].values, b.dataset[name].values,
                                       err_msg=name)
+
+
+def test_a_quiet_blocks_later_inner_steps_are_its_first_inner_steps_bit_for_bit():
+    """After a quiet block's first inner step only the hold's part of the step's start is
+    taken again (``F_STILL``): the run is the run that takes every inner step whole (the flag
+    cleared before each step), to the bit, through the pull and a separation inside a quiet
+    block (blocks up to the hold itself: it redoes its step from the q, q' kept at the
+    step's start): every recorded row, snapshot and event, and the state at the end."""
+    from flexlift.ascent import kernel
+    from flexlift.ascent.loop import Ascent
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.ascent.state import F_QUIET, F_STILL
+
+    sc = load_scenario("tanker").with_changes(**{"seabed.breakout_time_s": 150.0})
+    plant = coupled_plant(sc)
+    fast, whole = (Ascent(sc, plant, "coordinated", 800.0, "table") for _ in range(2))
+    n = fast.settings.n_steps
+    for run in (fast, whole):
+        run.settings = run.settings._replace(held_margin=-1.0)
+        run._room(n + 1)
+    kernel.advance(fast.inputs(), n + 1)
+    still = quiet = 0
+    for k in range(n + 1):
+        still += bool(whole.state.counters[1] & F_STILL)
+        quiet += bool(whole.state.counters[1] & F_QUIET)
+        was_still = bool(whole.state.counters[1] & F_STILL)
+        whole.state.counters[1] &= ~F_STILL
+        separated = whole.state.sep.any()
+        if kernel.advance(whole.inputs(), k + 1) != 0:
+            break
+        if whole.state.sep.any() and not separated:  # inside a quiet block, past its first
+            assert was_still and k % whole.settings.held_steps > 1, k  # inner step
+    assert quiet > 1000 and still > 1000  # the fast path was there to be taken
+    # stepped alone, the flag is set by an inner step and cleared by any other step
+    lone = Ascent(sc, plant, "coordinated", 800.0, "table")
+    lone.settings = lone.settings._replace(held_margin=-1.0)
+    lone._room(n + 1)
+    s = lone.settings
+    for k in range(n + 1):
+        inner = (bool(lone.state.counters[1] & F_QUIET) and k % s.held_steps != 0
+                 and k % s.k_str != 0)
+        if kernel.advance(lone.inputs(), k + 1) != 0:
+            break
+        assert bool(lone.state.counters[1] & F_STILL) is inner, k
+    assert whole.state.sep.all() and fast.state.sep.all()  # through the separation
+    for name in ("q", "v", "n", "H", "z", "V", "p", "gas_local", "vented"):
+        np.testing.assert_array_equal(getattr(fast.state, name), getattr(whole.state, name),
+                                      err_msg=name)
+    for name, a in fast.recorder._asdict().items():
+        np.testing.assert_array_equal(a, getattr(whole.recorder, name), err_msg=name)

@@ -38,6 +38,7 @@ from flexlift.ascent.state import (
     F_HAVE_B,
     F_HELD,
     F_QUIET,
+    F_STILL,
     RET_NEED_U,
     RET_STOP,
     Settings,
@@ -332,7 +333,7 @@ class Ascent:
         # (the held structure's mechanics were taken to the block's end at its first step:
         # it barely moves; the force extrapolation restarts). Outside a block: nothing.
         if self.state.counters[1] & F_HELD:
-            self.state.counters[1] &= ~(F_HELD | F_QUIET | F_HAVE_B)
+            self.state.counters[1] &= ~(F_HELD | F_QUIET | F_STILL | F_HAVE_B)
         self.fault_events.append((t, fault.kind, fault.bag, detail))
 
     def _per_bag(self) -> None:

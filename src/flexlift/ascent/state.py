@@ -131,6 +131,9 @@ F_HAVE_B, F_MATRIX, F_LIFTOFF, F_RESETTLE, F_OBSERVED, F_LIMIT_V, F_LIMIT_P, F_F
 F_HELD = 512
 #: flag: the held block's other steps step the hold only (kernel.quiet_step)
 F_QUIET = 1024
+#: flag: the previous step was a quiet block's inner step: since then nothing has changed but
+#: the hold (kernel.quiet_step steps only the hold's part of the step's start)
+F_STILL = 2048
 
 
 class Record(NamedTuple):
