@@ -84,7 +84,8 @@ def test_force_noise_keeps_every_step():
 def _settings(dt, k_out, k_ctrl=1):
     return Settings(dt=dt, n_steps=10, k_ctrl=k_ctrl, k_out=k_out, k_str=k_out, target=1.0,
                     tol=0.1, hold_time=1.0, v_limit=1.0, v_down_limit=1.0, pitch_limit=1.0,
-                    top_limit=np.zeros(1), external=False, held_steps=1, held_margin=0.05)
+                    top_limit=np.zeros(1), external=False, held_steps=1, held_margin=0.05,
+                    release_step=0.9)
 
 
 @pytest.mark.parametrize("dt, k_out, k_ctrl, m", [

@@ -222,8 +222,10 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
         state.counters[1] |= F_FRESH
     # the control samples once per quiet block, at its first step (a strength snapshot's
     # step inside the block runs the whole step but its sample: the commands stay held)
-    sample = k % settings.k_ctrl == 0 and not (state.counters[1] & F_QUIET
-                                               and k % settings.held_steps != 0)
+    # each modulus once (an integer division is ~15 ns; every step took six)
+    row, snap = k % settings.k_out == 0, k % settings.k_str == 0
+    sample = ((settings.k_ctrl == 1 or k % settings.k_ctrl == 0)
+              and not (state.counters[1] & F_QUIET and k % settings.held_steps != 0))
     if sample and control(t, k, plant, controllers, control_state, state, switches,
                           settings) == RET_NEED_U:
         return RET_NEED_U
@@ -235,15 +237,15 @@ def step(plant, controllers, control_state, state, switches, settings, recorder)
         state.counters[1] |= F_QUIET
     elif held < 0:
         state.counters[1] &= ~F_QUIET
-    if held != 0 or k % settings.k_out == 0 or k % settings.k_str == 0:
+    if held != 0 or row or snap:
         w_min = strip_loads(plant, state.q, state.v, state.H, state.sep, cur, noise, state.w,
                             state.wv, state.line, state.contact, state.active)
         generalised_force(plant, state.line, state.point, state.b)
     else:  # inside a held block: the structure's loads wait for the block's next step
         w_min = state.w.min()
-    if k % settings.k_out == 0:
+    if row:
         store_row(t, plant, controllers, control_state, state, switches, recorder)
-    if k % settings.k_str == 0:
+    if snap:
         store_snapshot(t, plant, state, switches, noise, recorder)
     if events(t, plant, state, switches, settings, recorder, w_min) != RET_DONE:
         return RET_STOP
@@ -282,7 +284,7 @@ def held_block(t, k, plant, controllers, control_state, state, switches, setting
         return -1
     if flags & F_HELD and k % m != 0 and not state.sep.any():
         return 0
-    start = (k % m == 0 and switches.chunk[0] < 0 and not state.sep.any()
+    start = (not state.sep.any() and k % m == 0 and switches.chunk[0] < 0
              and quiet_block(t, m, plant, controllers, control_state, state, switches, settings))
     if start:
         for g in range(plant.seabed.ng):
@@ -499,12 +501,17 @@ def limits(t, plant, state, switches, settings, recorder):
         if down > settings.v_down_limit and not state.counters[1] & F_LIMIT_D:
             state.counters[1] |= F_LIMIT_D
             log_event(recorder, t, EV_LIMIT_DESCENT, i_down, down)
-    pitch = abs(math.atan(dot(plant.modal.pitch_row, state.q)))
-    if pitch > state.scalars[1]:
-        state.scalars[1] = pitch
-        if pitch > settings.pitch_limit and not state.counters[1] & F_LIMIT_P:
-            state.counters[1] |= F_LIMIT_P
-            log_event(recorder, t, EV_LIMIT_PITCH, -1, pitch)
+    # the pitch's arc tangent only when its |tan| is the largest yet: atan is odd and
+    # monotonic, so the largest pitch and the step it first passes the limit are the same
+    slope = abs(dot(plant.modal.pitch_row, state.q))
+    if slope > state.scalars[5]:
+        state.scalars[5] = slope
+        pitch = math.atan(slope)
+        if pitch > state.scalars[1]:
+            state.scalars[1] = pitch
+            if pitch > settings.pitch_limit and not state.counters[1] & F_LIMIT_P:
+                state.counters[1] |= F_LIMIT_P
+                log_event(recorder, t, EV_LIMIT_PITCH, -1, pitch)
 
 
 @inline_jit
@@ -715,8 +722,8 @@ def holding(t, plant, state, switches, settings, recorder, noise):
     exactly), separation located inside the step, and breakout."""
     dt = settings.dt
     for g in range(plant.seabed.ng):
-        if state.sep[g]:
-            state.H[g] = released_holding(state.H[g], dt, plant.seabed.release_time)
+        if state.sep[g]:  # released_holding over one step: H exp(-dt / tau_r), the factor
+            state.H[g] = state.H[g] * settings.release_step  # computed once (Settings)
         else:
             # the rate at the start of the step (its uplift, kept in state.gap + state.H_old),
             # stepped by Adams-Bashforth 2 with the previous step's

@@ -49,6 +49,7 @@ from flexlift.ascent.state import (
 from flexlift.control.build import controller_for, fuzzy_maps
 from flexlift.control.controller import new_state
 from flexlift.errors import InputError, SimulationError
+from flexlift.physics.seabed import released_holding
 
 MODES = ("decentralized", "coordinated", "paper", "open-loop")
 #: the recorded hull row's pitch column
@@ -198,7 +199,8 @@ class Ascent:
             v_limit=lim.ascent_velocity_m_s, v_down_limit=lim.descent_velocity_m_s,
             pitch_limit=math.radians(90.0 if lim.pitch_deg is None else lim.pitch_deg),
             top_limit=bags.water_depth - lim.surface_clearance_m - bags.top_offset,
-            external=self.external is not None, held_steps=1, held_margin=HELD_MARGIN)
+            external=self.external is not None, held_steps=1, held_margin=HELD_MARGIN,
+            release_step=float(released_holding(1.0, dt, seabed.release_time)))
         if step_control:
             self.settings = self.settings._replace(held_steps=held_steps(self.settings))
         self.state = new_run_state(modal.nr, bags.nb, strips.ns, seabed.ng,

@@ -48,6 +48,8 @@ class Settings(NamedTuple):
     #                  (1: off; kernel.held_block)
     held_margin: float  # ... only while every group's uplift is below its hold by this
     #                     fraction of its H_0 [-]
+    release_step: float  # a released hold's factor over one step, exp(-dt / tau_r) [-]
+    #                      (physics.seabed.released_holding of 1 N)
 
 
 class Switches(NamedTuple):
@@ -94,7 +96,7 @@ class RunState(NamedTuple):
     counters: np.ndarray  # int: [0] step k, [1] flags (see F_*)
     scalars: np.ndarray  # float: [0] largest upward speed, [1] largest pitch, [2] hold since
     #                      (nan), [3] step of the cached implicit matrix (nan), [4] largest
-    #                      downward speed once separated
+    #                      downward speed once separated, [5] the largest pitch's |tan|
     # work arrays (no allocation per step)
     z: np.ndarray
     zd: np.ndarray
@@ -191,7 +193,7 @@ def new_run_state(nr: int, nb: int, ns: int, ng: int, ne: int) -> RunState:
         release=np.full((2, ng), nan), H_rate=z(ng), b_prev=z(nr), fill=z(nb), opening=z(nb),
         arrival=np.full(nb, nan), z_prev=z(nb), gas_local=z(nb), gas_free=z(nb), vented=z(nb),
         purged=z(nb), vented_free=z(nb), purged_free=z(nb), counters=z(2, np.int64),
-        scalars=np.array([0.0, 0.0, nan, nan, 0.0]), z=z(nb), zd=z(nb), p=z(nb), V=z(nb),
+        scalars=np.array([0.0, 0.0, nan, nan, 0.0, 0.0]), z=z(nb), zd=z(nb), p=z(nb), V=z(nb),
         w=z(ns), wv=z(ns), line=z(ns), contact=z(ns), active=z(ns, np.bool_),
         last_active=z(ns, np.bool_), point=z(nb), b=z(nr), implicit=z((nr, nr)),
         stiff=z((nr, nr)), damp=z((nr, nr)), meas=z((3, nb)), work=z((6, nr)), ndot=z(nb),

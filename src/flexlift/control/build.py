@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 import os
 
 import numpy as np
@@ -173,6 +174,8 @@ def controller_for(scenario, plant, mode: str, table: Table2D | None, fill_map
         deadband=c.volume_deadband_m3, k_pitch=c.coordination.pitch_gain_m3_rad,
         k_pitch_rate=c.coordination.pitch_rate_gain_m3s_rad,
         k_height=c.height_integral_gain_m2_s, filter_time=c.measurement_filter_s,
+        filter_gain=(1.0 - math.exp(-(1.0 / c.sample_rate_Hz) / c.measurement_filter_s)
+                     if c.measurement_filter_s > 0.0 else 0.0),
         ref_T=prof.duration if prof else 0.0, ref_z=prof.z if prof else np.zeros(2),
         ref_v=prof.v if prof else np.zeros(2),
         table=np.ascontiguousarray(values), fill_v=fill_map.table.values,

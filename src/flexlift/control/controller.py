@@ -89,6 +89,7 @@ class ControlArrays(NamedTuple):
     k_pitch_rate: float  # [m^3 s/rad]
     k_height: float  # adaptation of the neutral volume per metre of error [m^3/(m s)]
     filter_time: float  # measurement low-pass time constant (0: none) [s]
+    filter_gain: float  # its gain per sample, 1 - exp(-period / filter_time) [-]
     ref_T: float  # duration of the valve-limited planned ascent (0: the plain trapezoid) [s]
     ref_z: np.ndarray  # its height from 0 to the target, evenly over [0, ref_T] [m]
     ref_v: np.ndarray  # its speed [m/s]
@@ -153,7 +154,7 @@ def observe(t, z, zd, separated, controllers, control_state):
         control_state.z_f[:] = z
         control_state.zd_f[:] = zd
     elif controllers.filter_time > 0.0:
-        a = 1.0 - math.exp(-controllers.period / controllers.filter_time)
+        a = controllers.filter_gain  # 1 - exp(-period / filter_time)
         for i in range(nc):  # element by element: no temporary arrays at every sample
             control_state.z_f[i] += a * (z[i] - control_state.z_f[i])
             control_state.zd_f[i] += a * (zd[i] - control_state.zd_f[i])
