@@ -288,6 +288,13 @@ MUTATIONS = (
     M("still-never-cleared", "ascent/kernel.py",
       "    state.counters[1] &= ~F_STILL\n", "",
       "a quiet block's first inner step takes the state of the block before it"),
+    M("row-line-zero-sign", "ascent/recording.py",
+      "return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))",
+      "return a == b",
+      "a row whose line differs from the last row's by a zero's sign reuses its forces"),
+    M("row-line-flag-ignored", "ascent/recording.py",
+      "    same = bool(state.counters[1] & F_ROW_LINE)\n", "    same = True\n",
+      "the first row takes forces nobody computed"),
     # ------------------------------------------------------------------ a case's Python
     M("checksum-section-width", "scenario/file.py",
       "len(line) <= _WIDTH - _INDENT", "len(line) <= 10**6",

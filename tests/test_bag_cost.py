@@ -141,3 +141,45 @@ def test_a_step_and_its_recorded_row_allocate_nothing(many_bags):
             _nrt_python.memsys_disable_stats()
     assert int(run.recorder.counts[0]) - rows == 60  # a row every step
     assert forty == twenty
+
+
+def test_a_row_reuses_the_last_rows_line_forces_only_for_the_same_line_to_the_bit(many_bags):
+    """store_row keeps the eliminated modes' generalised forces of the last row's line
+    (``F_ROW_LINE``): a row of the same line to the bit reuses them (spoilt here to NaN to
+    see it); a line one bit apart in one strip, or a zero of the other sign, is computed
+    again (the dense correction's row)."""
+    from flexlift.ascent.state import F_ROW_LINE
+
+    sc, P = many_bags
+    run = Ascent(sc, P, "decentralized", 60.0, "table", share=False)
+    st, rec = run.state, run.recorder
+    rng = np.random.default_rng(3)
+    st.q[:] = 0.0
+    st.z[:] = 0.0
+    st.point[:] = rng.normal(4e5, 1e5, st.point.size)
+
+    def row():
+        r = int(rec.counts[0])
+        kernel.final_row(12.5, run.inputs())
+        return rec.bag[r, 0].copy()
+
+    # the first row computes its forces, whatever the scratch holds (a line of zeros, as the
+    # scratch's line starts)
+    assert not st.counters[1] & F_ROW_LINE
+    st.row_force[0][:] = np.nan
+    assert np.isfinite(row()).all()
+    st.line[:] = rng.normal(0.0, 2e4, st.line.size)
+    st.contact[:] = rng.normal(0.0, 1e4, st.contact.size)
+    st.line[0], st.contact[0] = -0.0, -0.0  # the first strip's line load: -0.0
+    first = row()
+    assert st.counters[1] & F_ROW_LINE and np.isfinite(first).all()
+    np.testing.assert_array_equal(row(), first)  # the same line: the same row
+    st.row_force[0][:] = np.nan
+    assert np.isnan(row()).all()  # ... from the kept forces
+    s = int(np.argmax(np.abs(P.bags.gen_strip).sum(0)))
+    st.line[s] = np.nextafter(st.line[s], np.inf)  # one bit
+    again = row()
+    assert np.isfinite(again).all()
+    st.row_force[0][:] = np.nan
+    st.contact[0] = 0.0  # -0.0 + 0.0 = +0.0: the same value, the other sign
+    np.testing.assert_array_equal(row(), again)

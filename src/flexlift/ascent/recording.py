@@ -16,7 +16,7 @@ import numpy as np
 from flexlift._jit import inline_jit, jit
 from flexlift.ascent.linalg import dot, matvec, matvec_add
 from flexlift.ascent.mechanics import accelerations
-from flexlift.ascent.state import MAX_EVENTS
+from flexlift.ascent.state import F_ROW_LINE, MAX_EVENTS
 from flexlift.physics.gas import purge_flow
 
 
@@ -41,14 +41,22 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
     out = recorder.bag[r]
     out[:, :] = np.nan
     # the line load (explicit plus contact), and the generalised forces of the eliminated
-    # modes, into the state's row scratch: a row allocates nothing
+    # modes, into the state's row scratch: a row allocates nothing. The line's forces are
+    # the last row's when its line is the last row's to the bit (the pull: the held
+    # structure at rest, every row alike; the product was a fifth of a held block's cost)
     line = state.row_line
+    same = bool(state.counters[1] & F_ROW_LINE)
     for s in range(line.size):
-        line[s] = state.line[s] + state.contact[s]
+        value = state.line[s] + state.contact[s]
+        same = same and _same_bits(value, line[s])
+        line[s] = value
     # plus the static correction of the eliminated modes, through their generalised forces
     # (records.Bags: factored, no bags x bags product); heights, slopes and their rates
     # computed in the row itself
-    f_line = matvec(bags.gen_strip, line, state.row_force[0])
+    f_line = state.row_force[0]
+    if not same:
+        matvec(bags.gen_strip, line, f_line)
+        state.counters[1] |= F_ROW_LINE
     f_point = matvec(bags.gen_bag, state.point, state.row_force[1])
     z = out[0]
     for i in range(nb):
@@ -84,6 +92,13 @@ def store_row(t, plant, controllers, control_state, state, switches, recorder):
     recorder.hull[r, 4] = contact
     recorder.t[r] = t
     recorder.counts[0] = r + 1
+
+
+@inline_jit
+def _same_bits(a, b):
+    """Whether floats ``a`` and ``b`` are the same number to the bit (a zero's sign too;
+    never a NaN)."""
+    return a == b and (a != 0.0 or math.copysign(1.0, a) == math.copysign(1.0, b))
 
 
 @inline_jit

@@ -136,6 +136,9 @@ F_QUIET = 1024
 #: flag: the previous step was a quiet block's inner step: since then nothing has changed but
 #: the hold (kernel.quiet_step steps only the hold's part of the step's start)
 F_STILL = 2048
+#: flag: state.row_force[0] holds the eliminated modes' generalised forces of state.row_line
+#: (recording.store_row)
+F_ROW_LINE = 4096
 
 
 class Record(NamedTuple):
