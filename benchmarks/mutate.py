@@ -295,6 +295,12 @@ MUTATIONS = (
     M("row-line-flag-ignored", "ascent/recording.py",
       "    same = bool(state.counters[1] & F_ROW_LINE)\n", "    same = True\n",
       "the first row takes forces nobody computed"),
+    M("strip-pair-starts-negative-zero", "ascent/linalg.py",
+      "        out_x[i] = 0.0\n", "        out_x[i] = -0.0\n",
+      "a strip's motion of zero products reads -0.0 where matvec's reads +0.0"),
+    M("strip-shape-t-paper-rows", "ascent/paper.py",
+      "shape_t=np.ascontiguousarray(shape.T)", "shape_t=np.ascontiguousarray(shape.T[::-1])",
+      "the paper plant's strips move by another mode's shape"),
     # ------------------------------------------------------------------ a case's Python
     M("checksum-section-width", "scenario/file.py",
       "len(line) <= _WIDTH - _INDENT", "len(line) <= 10**6",

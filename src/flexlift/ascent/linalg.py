@@ -59,6 +59,25 @@ def matvec_add(M, x, out):
 
 
 @inline_jit
+def matvec_t2(MT, x, y, out_x, out_y):
+    """out_x = M @ x and out_y = M @ y of one matrix M (m, n) given transposed, ``MT`` (n, m),
+    x and y (n,): each row's sum from 0.0 over the columns in order, as :func:`matvec`'s (the
+    same to the bit), the rows' sums advanced together column by column, so the compiler
+    vectorises them over the rows. For a tall matrix of few columns: the strips' motion,
+    44 x 5 for the tanker, 54 ns where two :func:`matvec` took 106 ns."""
+    n, m = MT.shape
+    for i in range(m):
+        out_x[i] = 0.0
+        out_y[i] = 0.0
+    for j in range(n):
+        xj, yj = x[j], y[j]
+        for i in range(m):
+            a = MT[j, i]
+            out_x[i] += a * xj
+            out_y[i] += a * yj
+
+
+@inline_jit
 def dot(a, b):
     """a @ b for two vectors."""
     s = 0.0

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexlift._jit import inline_jit, jit
-from flexlift.ascent.linalg import matvec, matvec_add
+from flexlift.ascent.linalg import matvec, matvec_add, matvec_t2
 from flexlift.ascent.records import BAG_ENCLOSED, BAG_OPEN_PARACHUTE, BAG_PAPER
 from flexlift.physics.gas import ambient_pressure, buoyancy, gas_volume, moles_of
 from flexlift.physics.hydro import drag
@@ -103,8 +103,7 @@ def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, activ
     suction) and the contact line loads [N/m], and which strips are in contact (``active``:
     their springs go into the implicit step). Returns the lowest strip height [m]."""
     strips = plant.strips
-    matvec(strips.shape, q, w)
-    matvec(strips.shape, v, wv)
+    matvec_t2(strips.shape_t, q, v, w, wv)
     # the plant's arrays taken once: read through the struct inside the loop, each element's
     # array was found again after every store (the compiler cannot tell the outputs from the
     # struct's own memory): a fifth of the loop's time was this function

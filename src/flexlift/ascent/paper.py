@@ -75,7 +75,8 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
     modal = Modal(nr=nr, omega2=om2, damping=damp, weight_force=-(force @ W),
                   pitch_row=pitch_row, heave_row=shape.mean(axis=0))
     strips = Strips(
-        ns=ne, shape=shape.copy(), force=force * trib[None, :], weight=trib.copy(),
+        ns=ne, shape=shape.copy(), shape_t=np.ascontiguousarray(shape.T),
+        force=force * trib[None, :], weight=trib.copy(),
         drag=np.full(ne, pstrips.drag[0]), contact_k=np.full(ne, pstrips.contact_k[0]),
         contact_c=np.full(ne, pstrips.contact_c[0]), group=np.arange(ne, dtype=np.int64),
         hold=1.0 / trib)

@@ -358,6 +358,7 @@ def strip_record(scenario, hull: Hull, nr: int, lay: Layout, hold: Holding) -> S
     ns = lay.xs.size
     return Strips(
         ns=ns, shape=np.ascontiguousarray(lay.psi_s[:, :nr]),
+        shape_t=np.ascontiguousarray(lay.psi_s[:, :nr].T),
         force=np.ascontiguousarray(lay.strip_gen[:nr]), weight=lay.ws,
         drag=np.full(ns, hydro.drag_coefficient(rho, hy.drag_coefficient, hull.breadth)),
         contact_k=np.full(ns, sb.contact_stiffness_N_m2),

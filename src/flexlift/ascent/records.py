@@ -73,6 +73,8 @@ class Strips(NamedTuple):
     ========================= =========== ==================================================
     ns                        -           number of strips
     shape (ns, nr)            m / q       displacement at each strip per unit q
+    shape_t (nr, ns)          m / q       the same, transposed (the step's strip motion,
+                                          :func:`~flexlift.ascent.linalg.matvec_t2`)
     force (nr, ns)            m           generalised force per unit line load at a strip
     weight (ns,)              m           quadrature weight: line load times it is a force
     drag (ns,)                kg/m^2      hull drag coefficient 1/2 rho C_D B
@@ -85,6 +87,7 @@ class Strips(NamedTuple):
 
     ns: int
     shape: np.ndarray
+    shape_t: np.ndarray
     force: np.ndarray
     weight: np.ndarray
     drag: np.ndarray
