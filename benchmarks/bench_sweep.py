@@ -22,9 +22,11 @@ case file to the exit: the results, the report), ``case_in_worker_s`` (the mean 
 cases' own ``elapsed_s``: the case in the loop, as the worker timed it). The load average
 is recorded before and after. ``--pairs N`` runs the tanker sweep N more times in each tree,
 alternating, for the spread of the end-to-end ratio (``tanker_pairs``: each run, the sorted
-ratios and their median). ``python benchmarks/bench_sweep.py [--samples 1000]
-[--bags-samples 100] [--no-baseline | --baseline COMMIT] [--pairs N] [--out FILE]``; writes
-``benchmarks/sweep.json``.
+ratios and their median). ``--starts N`` first runs N sweeps of 40 tanker cases of this tree
+for the fixed start and end alone (``starts``: each run's, with the load average before it,
+and the median start). ``python benchmarks/bench_sweep.py [--samples 1000]
+[--bags-samples 100] [--no-baseline | --baseline COMMIT] [--pairs N] [--starts N]
+[--out FILE]``; writes ``benchmarks/sweep.json``.
 """
 
 from __future__ import annotations
@@ -161,6 +163,22 @@ def _pairs(base_src: Path, specs: dict, work: Path, n: int, first_current: dict,
             "median": round(ratios[len(ratios) // 2], 2) if ratios else None}
 
 
+def _starts(work: Path, n: int) -> dict:
+    """The start and end of ``n`` small sweeps (40 tanker cases of the benchmark's SPEC,
+    ``--workers 2``) of this tree, after a warm one, each with the load average before it:
+    the fixed start measured alone, before the long sweeps load the machine."""
+    small = _specs(work, 40, 10)["tanker"]
+    _sweep(ROOT / "src", [str(small), "--workers", "1"], work / "o", 3600)  # warm
+    runs = []
+    for _ in range(n):
+        load = round(os.getloadavg()[0], 2)
+        r = _sweep(ROOT / "src", [str(small), "--workers", str(WORKERS)], work / "o", 3600)
+        runs.append({"load": load, "start_s": r.get("start_s"), "end_s": r.get("end_s")})
+    starts = sorted(r["start_s"] for r in runs if r["start_s"] is not None)
+    return {"cases": 40, "runs": runs,
+            "median_start_s": starts[len(starts) // 2] if starts else None}
+
+
 def _baseline_tree(tmp: Path, commit: str) -> Path | None:
     if shutil.which("git") is None:
         return None
@@ -181,6 +199,9 @@ def main(argv=None) -> dict:
     ap.add_argument("--pairs", type=int, default=0, metavar="N",
                     help="N more runs of the tanker sweep in each tree, alternating (the "
                     "baseline first), for the spread of the end-to-end ratio")
+    ap.add_argument("--starts", type=int, default=0, metavar="N",
+                    help="first, N sweeps of 40 tanker cases of this tree: their start and "
+                    "end alone, on the machine before the long sweeps")
     ap.add_argument("--out", default=str(OUT))
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="flexlift-bench-sweep-"))
@@ -192,6 +213,9 @@ def main(argv=None) -> dict:
     try:
         specs = _specs(tmp, args.samples, args.bags_samples)
         t0 = time.perf_counter()
+        if args.starts > 0:
+            (tmp / "starts").mkdir()
+            result["starts"] = _starts(tmp / "starts", args.starts)
         result["current"] = measure_tree(ROOT / "src", specs, args.samples, tmp, True)
         result["load_mid"] = [round(x, 2) for x in os.getloadavg()]
         base = None if args.no_baseline else _baseline_tree(tmp, args.baseline)
