@@ -49,6 +49,10 @@ positional argument:
   control/controller.py chosen on ``controllers.mode`` in ``observe``/``act``;
 - *a loop option*: a field of :class:`~flexlift.ascent.state.Settings` (set in
   :class:`flexlift.ascent.loop.Ascent`), read where it applies;
+- *anything that changes inside a quiet block's inner steps* besides the hold (a new law of
+  :func:`quiet_step`, or a change made between chunks): clear ``F_STILL`` where it acts, as
+  :meth:`flexlift.ascent.loop.Ascent._fault` does; the later inner steps take the step's
+  start as the first inner step left it (:func:`quiet_step`);
 - *a new kind of record*: a field of ``LoopInputs``, its struct in ``_structs`` and its view
   in ``_views``, and a parameter of only the functions that read it (a new part of the plant
   is a field of ``PlantRecords``, read as ``plant.part``). Below the entry points every
