@@ -205,7 +205,12 @@ def main(argv=None) -> dict:
     ap.add_argument("--out", default=str(OUT))
     args = ap.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="flexlift-bench-sweep-"))
+    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+                          capture_output=True, text=True).stdout.strip() or None
+    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "src"],
+                           capture_output=True, text=True).stdout.strip()
     result: dict = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                    "commit": head, "src_changed_since_commit": bool(dirty),
                     "samples": args.samples, "bags_samples": args.bags_samples,
                     "workers": WORKERS, "cores": os.cpu_count(),
                     "load_before": [round(x, 2) for x in os.getloadavg()]}

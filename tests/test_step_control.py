@@ -275,3 +275,61 @@ def test_a_quiet_blocks_later_inner_steps_are_its_first_inner_steps_bit_for_bit(
                                       err_msg=name)
     for name, a in fast.recorder._asdict().items():
         np.testing.assert_array_equal(a, getattr(whole.recorder, name), err_msg=name)
+
+
+def test_the_steps_constants_are_the_laws_to_the_bit():
+    """The loop's per-step constants, computed once: a released hold's factor over a step is
+    the law's own H exp(-dt / tau_r) of 1 N, and the measurement filter's gain the formula
+    the controller evaluated at every sample before."""
+    import math
+
+    from flexlift.ascent.loop import Ascent
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.physics.seabed import released_holding
+
+    sc = load_scenario("tanker").with_changes(**{"control.measurement_filter_s": 2.0})
+    run = Ascent(sc, coupled_plant(sc), "coordinated", 100.0, "table")
+    dt, tau = run.settings.dt, run.records.seabed.release_time
+    assert run.settings.release_step == released_holding(1.0, dt, tau) == math.exp(-dt / tau)
+    for H in (1.0, 3.7e6, 1e-300, 0.0):
+        assert H * run.settings.release_step == released_holding(H, dt, tau)
+    c = run.controllers
+    assert c.filter_time == 2.0
+    assert c.filter_gain == 1.0 - math.exp(-c.period / c.filter_time)
+
+
+def test_the_pitch_limit_and_largest_pitch_are_every_steps_own_atan():
+    """The loop takes the pitch's arc tangent only at a new largest |tan|: the largest pitch
+    and the step of the pitch-limit event are, to the bit, those of |atan| taken at every
+    step (the loop's own dot product, in order), stepping the run one step at a time."""
+    import math
+
+    from flexlift.ascent import kernel
+    from flexlift.ascent.loop import Ascent
+    from flexlift.ascent.plant import coupled_plant
+    from flexlift.ascent.state import EV_LIMIT_PITCH
+
+    sc = load_scenario("tanker").with_changes(**{"seabed.breakout_time_s": 60.0,
+                                                 "limits.pitch_deg": 0.05})
+    run = Ascent(sc, coupled_plant(sc), "coordinated", 900.0, "table")
+    n, s = run.settings.n_steps, run.state
+    run._room(n + 1)
+    row = run.records.modal.pitch_row
+    largest, first = 0.0, None
+    for k in range(n + 1):
+        if s.sep.any():  # limits() runs at the start of every step once separated
+            tan = 0.0
+            for i in range(row.size):
+                tan += row[i] * s.q[i]
+            pitch = abs(math.atan(tan))
+            largest = max(largest, pitch)
+            if first is None and pitch > run.settings.pitch_limit:
+                first = k
+        if kernel.advance(run.inputs(), k + 1) != 0:
+            break
+    rec = run.recorder
+    codes = rec.ev_code[: rec.counts[2]]
+    assert first is not None and (codes == EV_LIMIT_PITCH).sum() == 1
+    j = int(np.flatnonzero(codes == EV_LIMIT_PITCH)[0])
+    assert rec.ev_t[j] == first * run.settings.dt
+    assert s.scalars[1] == largest

@@ -507,6 +507,8 @@ def limits(t, plant, state, switches, settings, recorder):
             log_event(recorder, t, EV_LIMIT_DESCENT, i_down, down)
     # the pitch's arc tangent only when its |tan| is the largest yet: atan is odd and
     # monotonic, so the largest pitch and the step it first passes the limit are the same
+    # (glibc's atan is both to the bit; a libm whose atan were not could log the limit a
+    # step late: tests/test_step_control.py checks it against every step's own atan)
     slope = abs(dot(plant.modal.pitch_row, state.q))
     if slope > state.scalars[5]:
         state.scalars[5] = slope
