@@ -301,6 +301,13 @@ MUTATIONS = (
     M("strip-shape-t-paper-rows", "ascent/paper.py",
       "shape_t=np.ascontiguousarray(shape.T)", "shape_t=np.ascontiguousarray(shape.T[::-1])",
       "the paper plant's strips move by another mode's shape"),
+    M("pitch-tan-doubled", "ascent/kernel.py",
+      "    if slope > state.scalars[5]:\n", "    if slope > 2.0 * state.scalars[5]:\n",
+      "the pitch's atan skipped at a new largest |tan| below twice the last"),
+    M("release-step-two-steps", "ascent/loop.py",
+      "release_step=float(released_holding(1.0, dt, seabed.release_time))",
+      "release_step=float(released_holding(1.0, 2.0 * dt, seabed.release_time))",
+      "a released hold decays two steps' worth at every step"),
     # ------------------------------------------------------------------ a case's Python
     M("checksum-section-width", "scenario/file.py",
       "len(line) <= _WIDTH - _INDENT", "len(line) <= 10**6",
