@@ -495,16 +495,9 @@ def limits(t, plant, state, switches, settings, recorder):
             up, i_up = s, i
         elif -s > down:
             down, i_down = -s, i
-    if up > state.scalars[0]:
-        state.scalars[0] = up
-        if up > settings.v_limit and not state.counters[1] & F_LIMIT_V:
-            state.counters[1] |= F_LIMIT_V
-            log_event(recorder, t, EV_LIMIT_VELOCITY, i_up, up)
-    if down > state.scalars[4]:
-        state.scalars[4] = down
-        if down > settings.v_down_limit and not state.counters[1] & F_LIMIT_D:
-            state.counters[1] |= F_LIMIT_D
-            log_event(recorder, t, EV_LIMIT_DESCENT, i_down, down)
+    peak(t, state, recorder, 0, up, settings.v_limit, F_LIMIT_V, EV_LIMIT_VELOCITY, i_up)
+    peak(t, state, recorder, 4, down, settings.v_down_limit, F_LIMIT_D, EV_LIMIT_DESCENT,
+         i_down)
     # the pitch's arc tangent only when its |tan| is the largest yet: atan is odd and
     # monotonic, so the largest pitch and the step it first passes the limit are the same
     # (glibc's atan is both to the bit; a libm whose atan were not could log the limit a
@@ -512,12 +505,20 @@ def limits(t, plant, state, switches, settings, recorder):
     slope = abs(dot(plant.modal.pitch_row, state.q))
     if slope > state.scalars[5]:
         state.scalars[5] = slope
-        pitch = math.atan(slope)
-        if pitch > state.scalars[1]:
-            state.scalars[1] = pitch
-            if pitch > settings.pitch_limit and not state.counters[1] & F_LIMIT_P:
-                state.counters[1] |= F_LIMIT_P
-                log_event(recorder, t, EV_LIMIT_PITCH, -1, pitch)
+        peak(t, state, recorder, 1, math.atan(slope), settings.pitch_limit, F_LIMIT_P,
+             EV_LIMIT_PITCH, -1)
+
+
+@inline_jit
+def peak(t, state, recorder, slot, value, limit, flag, code, index):
+    """A running maximum: ``value`` kept in ``state.scalars[slot]`` when it is the largest
+    yet, and the first time it passes ``limit`` the event ``code`` logged (bag ``index``, or
+    -1) with it, once (the flag ``flag``)."""
+    if value > state.scalars[slot]:
+        state.scalars[slot] = value
+        if value > limit and not state.counters[1] & flag:
+            state.counters[1] |= flag
+            log_event(recorder, t, code, index, value)
 
 
 @inline_jit
