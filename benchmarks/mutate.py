@@ -308,6 +308,9 @@ MUTATIONS = (
       "release_step=float(released_holding(1.0, dt, seabed.release_time))",
       "release_step=float(released_holding(1.0, 2.0 * dt, seabed.release_time))",
       "a released hold decays two steps' worth at every step"),
+    M("peak-limit-ignored", "ascent/kernel.py",
+      "        if value > limit and not state.counters[1] & flag:\n", "        if False:\n",
+      "no speed or pitch limit event is ever logged"),
     # ------------------------------------------------------------------ a case's Python
     M("checksum-section-width", "scenario/file.py",
       "len(line) <= _WIDTH - _INDENT", "len(line) <= 10**6",
