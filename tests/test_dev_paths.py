@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture
 def dev():
-    if not (ROOT / ".venv" / ".flexlift-installed").is_file():
+    if not (ROOT / ".venv" / ".flexlift-run").is_file():
         pytest.skip("needs the repository's .venv (./dev test makes it)")
     return str(ROOT / "dev")
 
