@@ -355,3 +355,27 @@ def test_a_sweep_starts_its_workers_before_reading_the_spec():
         out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True,
                              text=True, timeout=120).stdout.split()
         assert out == ["mods0", str(started)], (args, out)
+
+
+def test_a_study_runs_each_case_until_it_has_an_outcome(tmp_path):
+    """Issue 40: a base whose 300 s run is too short for the study's slow breakouts (up to
+    2 x 150 s, then a 10 m ascent of ~450 s): the study runs each case with duration_s auto,
+    so no case ends incomplete; a duration the SPEC sets is kept."""
+    base = tmp_path / "short.yaml"
+    base.write_text("name: tanker\nsimulation:\n  duration_s: 300\n")
+    fixed = {"control.target_height_m": 10, "simulation.hold_time_s": 20,
+             "seabed.breakout_time_s": 150}
+    data = {"base": str(base), "control": "coordinated", "set": fixed, "study": "salvage",
+            "monte_carlo": {"samples": 3, "seed": 2}}
+    spec = parse_spec(data)
+    assert spec.base.simulation.duration_s == "auto"
+    res = run_sweep(spec, tmp_path / "o", engine=Serial())
+    kinds = [r["results"]["coordinated"]["outcome"] for r in res.records.values()]
+    assert len(kinds) == 3 and "incomplete" not in kinds, kinds
+    assert res.summary["failure_probability"]["all_criteria"]["incomplete"] == 0
+    # without auto the same cases would have ended incomplete (the test can fail)
+    kept = parse_spec({**data, "set": {**fixed, "simulation.duration_s": 300}})
+    assert kept.base.simulation.duration_s == 300
+    short = run_sweep(kept, tmp_path / "k", engine=Serial())
+    assert all(r["results"]["coordinated"]["outcome"] == "incomplete"
+               for r in short.records.values())
