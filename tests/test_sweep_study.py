@@ -125,8 +125,10 @@ def test_a_study_resumed_from_its_folders_spec_is_the_same_sweep(tmp_path):
         "dist": "uniform", "low": 0.5, "high": 11}}}}, ["high 11 is outside"]),
     ({"monte_carlo": {"samples": 4, "until_halfwidth": 0}}, ["until_halfwidth", "below 0.5"]),
     ({"monte_carlo": {"samples": 4, "until_halfwidth": 0.5}}, ["until_halfwidth", "below 0.5"]),
-    ({"monte_carlo": {"samples": 4, "method": "sobol", "until_halfwidth": 0.1}},
+    ({"monte_carlo": {"samples": 8, "method": "sobol", "until_halfwidth": 0.1}},
      ["no probabilities"]),
+    ({"monte_carlo": {"samples": 1, "method": "sobol"}},
+     ["samples (--samples): got 1; Sobol indices need at least 8 base samples"]),
 ])
 def test_bad_study_input_is_one_line(change, needles):
     data = {**study(), **change}
@@ -145,6 +147,8 @@ def test_the_command_line_refuses_in_one_line_with_exit_2(tmp_path, capsys):
     grid.write_text(yaml.safe_dump({"base": "tanker", "grid": {"seabed.breakout_time_s": [30]}}))
     for args, needle in ((["sweep", "--study", "volcano", "tanker"], "unknown study"),
                          (["sweep", str(grid), "--method", "sobol"], "Sobol indices need"),
+                         (["sweep", "--study", "salvage", "tanker", "--method", "sobol",
+                           "--samples", "1"], "at least 8 base samples"),
                          (["sweep", "--study", "salvage", "tanker", "--until-halfwidth", "0.7"],
                           "until_halfwidth")):
         assert main([*args, "--out", str(tmp_path / "o")]) == 2
@@ -204,10 +208,10 @@ def test_a_study_gives_the_same_results_on_two_workers_as_in_one_process(tmp_pat
 
 
 def test_a_sobol_study_gives_indices_and_no_probability(tmp_path):
-    spec = parse_spec(study(samples=2, method="sobol",
+    spec = parse_spec(study(samples=8, method="sobol",
                             vary={"disturbance.current_m_s": {"dist": "uniform", "low": 0,
                                                               "high": 0.01}}))
-    assert spec.n_cases == 2 * (len(spec.groups) + 2)
+    assert spec.n_cases == 8 * (len(spec.groups) + 2)
     res = run_sweep(spec, tmp_path / "o", engine=Serial())
     s = res.summary
     assert s["failure_probability"] == {} and "sobol" in s

@@ -453,6 +453,12 @@ def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path
         raise InputError(f"{where}.method", brief(method, 40), "lhs (Latin hypercube, "
                          "scipy.stats.qmc), random (plain Monte Carlo) or sobol (Saltelli's "
                          "design for Sobol indices, SALib)")
+    if method == "sobol":
+        from flexlift.sweep.sobol import MIN_BASE
+
+        if samples < MIN_BASE:
+            raise InputError(f"{where}.samples (--samples)", samples, f"Sobol indices need at "
+                             f"least {MIN_BASE} base samples (N x (keys + 2) cases)")
     if study is not None:  # the study's laws, already parsed and checked
         _check_study_ends(base, study, mc["vary"], where)
         return samples, seed, method, dict(mc["vary"])
