@@ -156,7 +156,8 @@ def _main(args: argparse.Namespace) -> int:
             h.removeFilter(quiet_cases)
     s = result.summary
     if args.json:
-        fp = {c: {k: v[k] for k in ("p", "low", "high")} for c, v in s["failure_probability"].items()}
+        fp = {c: {k: v[k] for k in ("p", "low", "high", "n", "incomplete", "incomplete_as")
+                  if k in v} for c, v in s["failure_probability"].items()}
         extra = {k: s[k] for k in ("sobol", "stopped_at", "halfwidths") if k in s}
         emit_json({"cases": s["cases"], "completed": s["completed"], "failed": s["failed"],
                    "engine": s["engine"], "failure_probability": fp,
