@@ -187,7 +187,11 @@ def test_a_study_over_the_time_limit_is_refused_in_one_line_naming_yes(tmp_path)
 @pytest.mark.parametrize("args, needle", [
     (["--phases", "pul"], "--phases: got 'pul'; use pull, breakout, mid, near_target"),
     (["--kinds", "valve_stuck"], "--kinds: got 'valve_stuck'; use bag_rupture, sling_break"),
-    (["--phases", "99999"], "a time inside the fault-free run"),
+    (["--phases", "99999"], "--phases: got '99999'; a time in seconds from 0 to 6000 s"),
+    (["--phases", "1e30"], "--phases: got '1e30'; a time in seconds from 0 to 6000 s"),
+    (["--phases", ""], "argument --phases: got ''; name at least one: pull, breakout"),
+    (["--kinds", ""], "argument --kinds: got ''; name at least one: bag_rupture, sling_break"),
+    (["--kinds", ",,,"], "argument --kinds: got ',,,'; name at least one: bag_rupture"),
 ])
 def test_bad_input_is_one_line_and_exit_2(args, needle, tmp_path):
     p = subprocess.run([sys.executable, "-m", "flexlift", "contingency", "--workers", "1",
@@ -313,3 +317,34 @@ def test_a_case_stopped_beyond_validity_has_the_answer_of_the_whole_run():
     assert ends[1] < ends[0] - 1000.0  # the stopped run is much shorter
     assert stopped == whole
     assert whole["up_ms_beyond"] and whole["up_ms"] is not None
+
+
+#: the tanker run too short to break out: its fault-free run never separates (incomplete)
+NEVER_SEPARATES = TANKER.with_changes(**{"simulation.duration_s": 30})
+
+
+def test_a_study_with_no_case_or_an_incomplete_baseline_gives_no_verdict(tmp_path):
+    """Issue 40: no phase reached, so no case: not "tolerant" beside an incomplete baseline."""
+    s = study(NEVER_SEPARATES, tmp_path / "o", kinds=["bag_rupture"], margins=False)
+    assert s["n_cases"] == 0 and s["baseline"]["outcome"] == "incomplete"
+    assert s["tolerant"] is None and s["verdict"].startswith("no verdict: ")
+    with pytest.raises(InputError, match="--kinds: got ''; name at least one kind"):
+        study(NEVER_SEPARATES, tmp_path / "k", kinds=[])
+    with pytest.raises(InputError, match="--phases: got ''; name at least one phase"):
+        study(NEVER_SEPARATES, tmp_path / "p", phases=(), times=())
+
+
+def test_no_verdict_is_exit_1_and_a_folder_of_another_study_names_the_command(tmp_path):
+    path = tmp_path / "short.yaml"
+    path.write_text(NEVER_SEPARATES.to_yaml())
+    out = tmp_path / "o"
+    cmd = [sys.executable, "-m", "flexlift", "contingency", str(path), "--workers", "1",
+           "--kinds", "bag_rupture", "--no-margin", "--out", str(out), "--json"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 1, p.stderr
+    assert json.loads(p.stdout)["tolerant"] is None
+    path.write_text(NEVER_SEPARATES.with_changes(**{"simulation.duration_s": 31}).to_yaml())
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 2, p.stderr
+    assert "holds another `flexlift contingency` (its input differs)" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr

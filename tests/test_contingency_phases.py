@@ -72,3 +72,9 @@ def test_a_time_outside_the_run_and_an_unknown_phase_are_one_line():
     with pytest.raises(InputError, match="use pull, breakout, mid, near_target"):
         parse_phases(["pul"])
     assert parse_phases(["mid", "t1800", "90s", "mid"]) == (("mid",), (1800.0, 90.0))
+    # beyond the scenario's run length, echoed as the user wrote it (issue 40)
+    with pytest.raises(InputError, match=r"--phases: got '1e30'; a time in seconds from 0 to "
+                       r"6000 s"):
+        parse_phases(["1e30"], 6000.0)
+    with pytest.raises(InputError, match="name at least one phase"):
+        parse_phases([])

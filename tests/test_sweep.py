@@ -412,7 +412,8 @@ def test_outputs_netcdf_summary_report_and_exact_reruns(tmp_path, capsys):
     assert (j["cases"], j["completed"], j["failed"], j["engine"]) == (6, 6, 0, "serial")
     assert Path(j["out"]) == out.resolve()
     for crit, w in j["failure_probability"].items():
-        assert set(w) == {"p", "low", "high"} and 0 <= w["low"] <= w["p"] <= w["high"] <= 1, crit
+        assert set(w) == {"p", "low", "high", "n", "incomplete", "incomplete_as"}, crit
+        assert 0 <= w["low"] <= w["p"] <= w["high"] <= 1 and w["n"] == 6, crit
     for crit, ranked in j["sensitivity"].items():
         assert all(isinstance(k, str) and -1 <= s <= 1 for k, s in ranked), crit
     ds = xr.open_dataset(out / "results.nc", engine="scipy").load()

@@ -30,7 +30,7 @@ def _records(results: list[dict]) -> dict:
 OK = {"pitch": True, "reached_target": True}
 
 
-def test_outcomes_split_the_failure_probability_and_incomplete_is_not_a_failure():
+def test_outcomes_split_the_failure_probability_and_all_criteria_is_their_union():
     recs = _records([
         _result("safe", OK),
         _result("incomplete", {"pitch": True, "reached_target": False}),
@@ -40,9 +40,13 @@ def test_outcomes_split_the_failure_probability_and_incomplete_is_not_a_failure(
     ])
     fp = agg.failure_probability(recs, ["m"])["m"]
     op = agg.outcome_probability(recs, ["m"])["m"]
-    # failing: unsafe, not achieved and failed to run; the incomplete run is not one
-    assert fp[agg.ALL]["failed"] == 3 and fp[agg.ALL]["n"] == 5
-    assert fp["reached_target"]["failed"] == 4  # the criterion itself still failed
+    # all criteria: any criterion failed, the incomplete run too (it did not hold the target)
+    assert fp[agg.ALL]["failed"] == 4 and fp[agg.ALL]["n"] == 5
+    assert fp["reached_target"]["failed"] == 4
+    # each says over how many cases, and how the one incomplete case counts for it
+    assert fp[agg.ALL]["incomplete"] == 1 and fp[agg.ALL]["incomplete_as"] == "failed"
+    assert fp["reached_target"]["incomplete_as"] == "failed"
+    assert fp["pitch"]["incomplete_as"] == "passed" and fp["pitch"]["failed"] == 2
     assert {k: w["failed"] for k, w in op.items()} == {
         "unsafe": 1, "not_achieved": 1, "failed": 1, "incomplete": 1}
     # Wilson's 95 % score interval of 1 in 5 (Wilson 1927; tabulated: 0.0362 - 0.6245)
@@ -50,9 +54,30 @@ def test_outcomes_split_the_failure_probability_and_incomplete_is_not_a_failure(
         assert w["p"] == 0.2
         assert w["low"] == pytest.approx(0.0362, abs=1e-4)
         assert w["high"] == pytest.approx(0.6245, abs=1e-4)
-    # the influence on failing ranks by the failing outcome, not by any criterion failed
+    # the worst-case ordering still ranks a failing outcome above an incomplete one
     assert [agg.failing(r["results"]["m"]) for r in recs.values()] == [False, False, True, True,
                                                                         True]
+
+
+def test_all_criteria_is_the_union_of_the_criteria_on_hand_built_results():
+    """Case by case, all_criteria fails exactly when some criterion fails."""
+    crits = [{"pitch": True, "speed": True, "reached_target": True},
+             {"pitch": False, "speed": True, "reached_target": True},
+             {"pitch": True, "speed": False, "reached_target": True},
+             {"pitch": True, "speed": True, "reached_target": False},
+             {"pitch": False, "speed": False, "reached_target": False},
+             {"pitch": True, "speed": True, "reached_target": True}]
+    kinds = ["safe", "unsafe", "unsafe", "incomplete", "unsafe", "safe"]
+    recs = _records([_result(k, c) for k, c in zip(kinds, crits, strict=True)])
+    fp = agg.failure_probability(recs, ["m"])["m"]
+    union = sum(not all(c.values()) for c in crits)
+    assert union == 4
+    assert fp[agg.ALL]["failed"] == union and fp[agg.ALL]["n"] == 6
+    assert fp[agg.ALL]["failed"] >= max(fp[c]["failed"] for c in crits[0])
+    ds_flags = agg.sensitivity(recs, ["m"], [])["m"]
+    assert agg.ALL in ds_flags
+    curve = agg.convergence(recs, ["m"])["m"]
+    assert curve[agg.ALL][-1][0] == pytest.approx(union / 6)
 
 
 def test_a_record_from_before_outcomes_reads_from_its_criteria():
@@ -71,13 +96,15 @@ def test_a_sweep_whose_short_runs_end_incomplete_counts_them_apart(tmp_path):
     assert short["outcome"] == "incomplete" and long_["outcome"] == "safe"
     assert "the run ended at 200 s" in short["cause"]
     s = res.summary
-    assert s["failure_probability"]["all_criteria"]["failed"] == 0
+    assert s["failure_probability"]["all_criteria"]["failed"] == 1  # the union: incomplete too
+    assert s["failure_probability"]["all_criteria"]["incomplete"] == 1
     assert s["failure_probability"]["reached_target"]["failed"] == 1
     assert s["outcome_probability"]["incomplete"]["failed"] == 1
     assert s["outcome_probability"]["incomplete"]["n"] == 2
     html = (tmp_path / "o" / "report.html").read_text()
-    assert "incomplete: every limit held, the run ended first" in html
+    assert "incomplete: every limit held, the run ended before the target was held" in html
     assert "safe in 1 of 2 cases (1 incomplete)" in html
+    assert "the 1 incomplete case(s) count as failing reached target and all criteria" in html
     on_disk = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert on_disk["outcomes_by_control"]["coordinated"]["incomplete"]["failed"] == 1
 

@@ -125,8 +125,10 @@ def test_a_study_resumed_from_its_folders_spec_is_the_same_sweep(tmp_path):
         "dist": "uniform", "low": 0.5, "high": 11}}}}, ["high 11 is outside"]),
     ({"monte_carlo": {"samples": 4, "until_halfwidth": 0}}, ["until_halfwidth", "below 0.5"]),
     ({"monte_carlo": {"samples": 4, "until_halfwidth": 0.5}}, ["until_halfwidth", "below 0.5"]),
-    ({"monte_carlo": {"samples": 4, "method": "sobol", "until_halfwidth": 0.1}},
+    ({"monte_carlo": {"samples": 8, "method": "sobol", "until_halfwidth": 0.1}},
      ["no probabilities"]),
+    ({"monte_carlo": {"samples": 1, "method": "sobol"}},
+     ["samples (--samples): got 1; Sobol indices need at least 8 base samples"]),
 ])
 def test_bad_study_input_is_one_line(change, needles):
     data = {**study(), **change}
@@ -145,6 +147,8 @@ def test_the_command_line_refuses_in_one_line_with_exit_2(tmp_path, capsys):
     grid.write_text(yaml.safe_dump({"base": "tanker", "grid": {"seabed.breakout_time_s": [30]}}))
     for args, needle in ((["sweep", "--study", "volcano", "tanker"], "unknown study"),
                          (["sweep", str(grid), "--method", "sobol"], "Sobol indices need"),
+                         (["sweep", "--study", "salvage", "tanker", "--method", "sobol",
+                           "--samples", "1"], "at least 8 base samples"),
                          (["sweep", "--study", "salvage", "tanker", "--until-halfwidth", "0.7"],
                           "until_halfwidth")):
         assert main([*args, "--out", str(tmp_path / "o")]) == 2
@@ -204,10 +208,10 @@ def test_a_study_gives_the_same_results_on_two_workers_as_in_one_process(tmp_pat
 
 
 def test_a_sobol_study_gives_indices_and_no_probability(tmp_path):
-    spec = parse_spec(study(samples=2, method="sobol",
+    spec = parse_spec(study(samples=8, method="sobol",
                             vary={"disturbance.current_m_s": {"dist": "uniform", "low": 0,
                                                               "high": 0.01}}))
-    assert spec.n_cases == 2 * (len(spec.groups) + 2)
+    assert spec.n_cases == 8 * (len(spec.groups) + 2)
     res = run_sweep(spec, tmp_path / "o", engine=Serial())
     s = res.summary
     assert s["failure_probability"] == {} and "sobol" in s
@@ -355,3 +359,27 @@ def test_a_sweep_starts_its_workers_before_reading_the_spec():
         out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True,
                              text=True, timeout=120).stdout.split()
         assert out == ["mods0", str(started)], (args, out)
+
+
+def test_a_study_runs_each_case_until_it_has_an_outcome(tmp_path):
+    """Issue 40: a base whose 300 s run is too short for the study's slow breakouts (up to
+    2 x 150 s, then a 10 m ascent of ~450 s): the study runs each case with duration_s auto,
+    so no case ends incomplete; a duration the SPEC sets is kept."""
+    base = tmp_path / "short.yaml"
+    base.write_text("name: tanker\nsimulation:\n  duration_s: 300\n")
+    fixed = {"control.target_height_m": 10, "simulation.hold_time_s": 20,
+             "seabed.breakout_time_s": 150}
+    data = {"base": str(base), "control": "coordinated", "set": fixed, "study": "salvage",
+            "monte_carlo": {"samples": 3, "seed": 2}}
+    spec = parse_spec(data)
+    assert spec.base.simulation.duration_s == "auto"
+    res = run_sweep(spec, tmp_path / "o", engine=Serial())
+    kinds = [r["results"]["coordinated"]["outcome"] for r in res.records.values()]
+    assert len(kinds) == 3 and "incomplete" not in kinds, kinds
+    assert res.summary["failure_probability"]["all_criteria"]["incomplete"] == 0
+    # without auto the same cases would have ended incomplete (the test can fail)
+    kept = parse_spec({**data, "set": {**fixed, "simulation.duration_s": 300}})
+    assert kept.base.simulation.duration_s == 300
+    short = run_sweep(kept, tmp_path / "k", engine=Serial())
+    assert all(r["results"]["coordinated"]["outcome"] == "incomplete"
+               for r in short.records.values())

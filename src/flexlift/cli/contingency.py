@@ -9,9 +9,11 @@ run (``--all``: every bag). The cases run on the sweep engine (``--workers``, ``
 run the same command again after an interruption and only the missing cases run. It ends with
 ``contingency.json``, ``report.html`` and one rerun scenario per case in ``rerun/``.
 
-Exit codes: 0 single-failure tolerant; 1 not (the failures are results: see the report), or a
-case raised a programming error; 2 bad input (an unknown phase or kind, a time outside the
-run, a kind the plan has no part for, too many cases); 130 interrupted (finished cases kept).
+Exit codes: 0 single-failure tolerant; 1 not (the failures are results: see the report), no
+verdict (no case ran, or the fault-free run or a case ended incomplete: "tolerant": null), or a
+case raised a programming error; 2 bad input (no, or an unknown, phase or kind, a time beyond
+the run, a kind the plan has no part for, too many cases); 130 interrupted (finished cases
+kept).
 """
 
 from __future__ import annotations
@@ -33,8 +35,23 @@ from flexlift.scenario.types import whole
 from flexlift.sweep.executors import WORKERS_PER_CORE, max_workers
 
 
-def _words(text: str) -> list[str]:
-    return [w for w in text.replace(",", " ").split() if w]
+def _words(option: str, allowed: str):
+    """argparse type: a comma-separated list of at least one word (an empty one is refused in
+    one line naming ``option`` and what is ``allowed``)."""
+
+    def parse(text: str) -> list[str]:
+        words = [w for w in text.replace(",", " ").split() if w]
+        if not words:
+            raise argparse.ArgumentTypeError(f"got {text!r}; name at least one: {allowed}")
+        return words
+
+    return parse
+
+
+def _kinds() -> str:
+    from flexlift.sweep.contingency.cases import KINDS
+
+    return ", ".join(KINDS)
 
 
 def add_parser(sub) -> None:
@@ -46,10 +63,11 @@ def add_parser(sub) -> None:
     add_scenario_arg(p)
     p.add_argument("--control", choices=MODES, default=None,
                    help="control mode (default: the scenario's control.mode)")
-    p.add_argument("--phases", type=_words, default=None, metavar="LIST",
+    p.add_argument("--phases", type=_words("--phases", "pull, breakout, mid, near_target or "
+                                           "a time in seconds"), default=None, metavar="LIST",
                    help="phases, comma-separated: pull, breakout, mid, near_target and/or "
                         "times in seconds (default: the four phases)")
-    p.add_argument("--kinds", type=_words, default=None, metavar="LIST",
+    p.add_argument("--kinds", type=_words("--kinds", _kinds()), default=None, metavar="LIST",
                    help="failure kinds, comma-separated (default: every kind the bags have "
                         "the part for)")
     p.add_argument("--all", action="store_true", dest="all_bags",
@@ -82,7 +100,8 @@ def _main(args: argparse.Namespace) -> int:
     from flexlift.sweep.worker import CaseError, OutsideCases
 
     scenario = scenario_from(args)
-    names, times = parse_phases(args.phases) if args.phases is not None else (PHASES, ())
+    names, times = (parse_phases(args.phases, scenario.simulation.run_length_s)
+                    if args.phases is not None else (PHASES, ()))
     out = args.out if args.out is not None else Path("flexlift-out") / f"contingency-{scenario.name}"
     engine = make_engine(args.workers, args.scheduler, args.dask_local)
     bar = _Bar(args.quiet or args.json, engine.name)

@@ -156,7 +156,8 @@ def _main(args: argparse.Namespace) -> int:
             h.removeFilter(quiet_cases)
     s = result.summary
     if args.json:
-        fp = {c: {k: v[k] for k in ("p", "low", "high")} for c, v in s["failure_probability"].items()}
+        fp = {c: {k: v[k] for k in ("p", "low", "high", "n", "incomplete", "incomplete_as")
+                  if k in v} for c, v in s["failure_probability"].items()}
         extra = {k: s[k] for k in ("sobol", "stopped_at", "halfwidths") if k in s}
         emit_json({"cases": s["cases"], "completed": s["completed"], "failed": s["failed"],
                    "engine": s["engine"], "failure_probability": fp,
@@ -226,12 +227,12 @@ def _print_summary(s: dict, out: Path) -> None:
         w = fp.get("all_criteria")
         if w and w["n"]:
             o = s["outcomes_by_control"][mode]
-            lines.append(f"{mode}: probability of failure (unsafe, not achieved or failed to "
-                         f"run) {w['p']:.3g} (95 % {w['low']:.3g}-{w['high']:.3g}, "
-                         f"{w['failed']} of {w['n']}: {o['unsafe']['failed']} unsafe, "
+            lines.append(f"{mode}: probability that any criterion fails {w['p']:.3g} "
+                         f"(95 % {w['low']:.3g}-{w['high']:.3g}, {w['failed']} of {w['n']} "
+                         f"cases: {o['unsafe']['failed']} unsafe, "
                          f"{o['not_achieved']['failed']} not achieved, {o['failed']['failed']} "
-                         f"failed to run); {o['incomplete']['failed']} incomplete (the run "
-                         "ended first: not a failure)")
+                         f"failed to run, {o['incomplete']['failed']} incomplete (the run "
+                         "ended before the target was held, counted as failing)")
     for mode, outs in s.get("sobol", {}).items():
         for name, res in outs.items():
             drivers = [g for g, v in sorted(res.get("groups", {}).items(),

@@ -6,10 +6,12 @@
   memory: whether the lift was safe is not known). Each one's probability with its 95 %
   Wilson score interval.
 - **Failure probability** of each criterion per control mode (failed cases / cases run, with
-  the Wilson interval), and of ``all_criteria``: the lift failing, that is unsafe, not achieved
-  or failed to run. An incomplete run is not a failure (it is a run too short to say); a mode
-  whose numerics failed counts as failing every criterion; a lost case (its worker died
-  twice) counts in neither.
+  the Wilson interval), and of ``all_criteria``: the union of the criteria, a case failing
+  any one of them. Each entry gives ``n`` (the cases it is taken over), ``incomplete`` (how
+  many of them ran out of time with every limit held) and ``incomplete_as`` (how those count
+  for it): an incomplete case did not hold the target, so it fails ``reached_target`` and
+  ``all_criteria`` and passes the limits it held. A mode whose numerics failed counts as
+  failing every criterion; a lost case (its worker died twice) counts in none.
 - **Influence** of each varied key: Spearman's rank correlation between the key's values and
   a criterion's failure (1 failed, 0 passed), or a headline number, over the cases run;
   ranked by its magnitude. Keys whose values do not vary, and criteria whose outcome does not
@@ -136,14 +138,30 @@ def failing(result: dict) -> bool:
     return outcome_of(result) in FAILING
 
 
+def any_failed(result: dict, names: list[str]) -> bool:
+    """Whether a mode's result failed any criterion of ``names`` (``all_criteria``)."""
+    return bool(failed_criteria(result, names)) or (
+        result["status"] == "completed" and outcome_of(result) != "safe")
+
+
 def failure_probability(records: dict, modes) -> dict:
-    """{mode: {criterion: wilson(...)}}, with ``all_criteria`` (the lift failing) last."""
+    """{mode: {criterion: wilson(...)}}, with ``all_criteria`` (any criterion failed) last;
+    each entry also says how many of its ``n`` cases were incomplete and how they count."""
     out = {}
     for mode in modes:
         rs, names = ran(records, mode), criteria_names(records, mode)
         fails = [failed_criteria(r["results"][mode], names) for r in rs]
-        out[mode] = {c: wilson(sum(c in f for f in fails), len(rs)) for c in names}
-        out[mode][ALL] = wilson(sum(failing(r["results"][mode]) for r in rs), len(rs))
+        short = [outcome_of(r["results"][mode]) == "incomplete" for r in rs]
+        n_short = sum(short)
+        out[mode] = {}
+        for c in names:
+            as_failed = c == "reached_target" or any(
+                c in f for f, s in zip(fails, short, strict=True) if s)
+            out[mode][c] = {**wilson(sum(c in f for f in fails), len(rs)), "incomplete": n_short,
+                            "incomplete_as": "failed" if as_failed else "passed"}
+        out[mode][ALL] = {**wilson(sum(any_failed(r["results"][mode], names) for r in rs),
+                                   len(rs)),
+                          "incomplete": n_short, "incomplete_as": "failed"}
     return out
 
 
@@ -178,7 +196,7 @@ def sensitivity(records: dict, modes, keys) -> dict:
         fails = [failed_criteria(r["results"][mode], names) for r in rs]
         xs = {k: numeric([r["values"][k] for r in rs]) for k in keys}
         out[mode] = {}
-        bad = [failing(r["results"][mode]) for r in rs]
+        bad = [any_failed(r["results"][mode], names) for r in rs]
         for c in [*names, ALL]:
             y = [float(b) for b in bad] if c == ALL else [float(c in f) for f in fails]
             out[mode][c] = _ranked({k: spearman(x, y) for k, x in xs.items()})
@@ -296,7 +314,7 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict):
             text["failed_criteria"][i, j] = ", ".join(failed)
             for c in names_m:
                 flags[c][i, j] = 0 if c in failed else 1
-            flags[ALL][i, j] = 0 if failing(res) else 1
+            flags[ALL][i, j] = 0 if any_failed(res, names_m) else 1
             for h, v in res.get("headline", {}).items():
                 if v is not None and h in nums:
                     nums[h][i, j] = float(v)
@@ -305,7 +323,8 @@ def build_dataset(spec, cases, names: dict, records: dict, attrs: dict):
     flag_attrs = {"flag_values": np.array([-1, 0, 1], dtype=np.int8),
                   "flag_meanings": "not_run failed passed"}
     for c, arr in flags.items():
-        long = ("the lift: unsafe, not achieved or failed to run (0); safe or incomplete (1)"
+        long = ("any criterion failed: unsafe, not achieved, incomplete or failed to run (0); "
+                "safe (1)"
                 if c == ALL else f"criterion {c}")
         data[f"criterion_{c}"] = (("case", "control"), arr, {**flag_attrs, "long_name": long})
     for h, arr in nums.items():
@@ -322,7 +341,7 @@ CONVERGENCE_POINTS = 40
 
 def convergence(records: dict, modes) -> dict:
     """{mode: {"n": [cases], outcome: [[p, low, high], ...]}}: each probability (the outcomes
-    but safe, and the lift failing) after the first n cases run (by case index), at up to
+    but safe, and any criterion failing) after the first n cases run (by case index), at up to
     :data:`CONVERGENCE_POINTS` values of n spaced geometrically, the last all of them."""
     out = {}
     for mode in modes:
@@ -334,7 +353,7 @@ def convergence(records: dict, modes) -> dict:
         ns = sorted({int(round(v)) for v in np.geomspace(1, total, CONVERGENCE_POINTS)} | {total})
         curve: dict = {"n": ns}
         for k in [*(o for o in OUTCOMES if o != "safe"), ALL]:
-            hits = np.cumsum([(kind in FAILING) if k == ALL else (kind == k) for kind in kinds])
+            hits = np.cumsum([(kind != "safe") if k == ALL else (kind == k) for kind in kinds])
             curve[k] = [[w["p"], w["low"], w["high"]]
                         for w in (wilson(int(hits[n - 1]), n) for n in ns)]
         out[mode] = curve

@@ -175,7 +175,7 @@ OUTCOME_ROWS = {
     "unsafe": "unsafe: a limit broken",
     "not_achieved": "not achieved: every limit held, the plan cannot finish",
     "failed": "failed to run: numerics, invalid values or out of memory",
-    "incomplete": "incomplete: every limit held, the run ended first (not a failure)",
+    "incomplete": "incomplete: every limit held, the run ended before the target was held",
 }
 
 
@@ -189,11 +189,24 @@ def _probabilities(summary: dict, mode: str) -> str:
     fp = summary["by_control"][mode]
     rows = [_row(c.replace("_", " "), w) for c, w in fp.items() if c != agg.ALL]
     out = summary.get("outcomes_by_control", {}).get(mode, {})
-    rows += [_row(OUTCOME_ROWS[k], w, k != "incomplete") for k, w in out.items()
-             if k in OUTCOME_ROWS]
+    rows += [_row(OUTCOME_ROWS[k], w) for k, w in out.items() if k in OUTCOME_ROWS]
     if agg.ALL in fp:
-        rows.append(_row("the lift fails: unsafe, not achieved or failed to run", fp[agg.ALL]))
-    return _table(["criterion or outcome", "cases", "probability", "95 % interval (Wilson)"], rows)
+        rows.append(_row("all criteria: any criterion failed (the union)", fp[agg.ALL]))
+    return (_table(["criterion or outcome", "cases", "probability", "95 % interval (Wilson)"],
+                   rows) + _counted(fp))
+
+
+def _counted(fp: dict) -> str:
+    """The line under a probability table: over how many cases, and how the incomplete count."""
+    w = fp.get(agg.ALL) or next(iter(fp.values()), None)
+    if not w:
+        return ""
+    short = w.get("incomplete", 0)
+    text = f"Every probability is over the {w['n']} case(s) run in this mode"
+    if short:
+        text += (f"; the {short} incomplete case(s) count as failing reached target and all "
+                 "criteria, and as passing the limits they held")
+    return f"<p>{text}.</p>"
 
 
 def _verdict(summary: dict, mode: str) -> str:
@@ -202,16 +215,16 @@ def _verdict(summary: dict, mode: str) -> str:
         return f'<div class="verdict">{_e(mode)}: no case ran.</div>'
     o = summary.get("outcomes_by_control", {}).get(mode, {})
     count = {k: o[k]["failed"] for k in OUTCOME_ROWS if k in o}
-    safe = w["n"] - w["failed"] - count.get("incomplete", 0)
+    safe = w["n"] - w["failed"]
     parts = [f"{n} {k.replace('_', ' ')}" for k, n in count.items() if n]
     more = ""
     if count.get("incomplete"):
         more = (f" {count['incomplete']} case(s) ended before the target was held with every "
-                "limit kept: not failures; a longer run (simulation.duration_s, or auto) says "
-                "how they end.")
+                "limit kept, counted as failing: a longer run (simulation.duration_s: auto) "
+                "says how they end.")
     return (f'<div class="verdict"><b>{_e(mode)} control:</b> safe in {safe} of {w["n"]} cases'
             + (f" ({', '.join(parts)})" if parts else "")
-            + f": probability of failure (unsafe, not achieved or failed to run) {_pct(w['p'])} "
+            + f": probability that any criterion fails {_pct(w['p'])} "
             f"(95 % interval {_pct(w['low'])} – {_pct(w['high'])}).{more}</div>")
 
 
@@ -299,8 +312,8 @@ def render_report(result, summary: dict, rerun: dict, pngs: dict | None = None) 
                   "<p class='meta'>A case whose numerics failed, or whose values do not make a "
                   "valid scenario (e.g. a lift plan that cannot be laid out), counts as failing "
                   "every criterion and as failed to run; an incomplete case (every limit held, "
-                  "the run ended before the target was held) fails the criterion reached target "
-                  "but is not a failure of the lift; lost cases are not counted.</p>",
+                  "the run ended before the target was held) fails the criteria reached target and "
+                  "all criteria and passes the limits it held; lost cases are not counted.</p>",
                   f"<h2>Convergence: {_e(m)} control</h2>", _convergence(summary, m, pngs),
                   f"<h2>Influence of the keys: {_e(m)} control</h2>", _influence(summary, m, keys),
                   _figure(pngs.get(f"tornado:{m}"),

@@ -23,6 +23,8 @@ import numpy as np
 
 #: bootstrap resamples of the confidence intervals
 RESAMPLES = 200
+#: the fewest whole base samples that give indices (fewer: none; a SPEC asking fewer is refused)
+MIN_BASE = 8
 #: the outputs: (name, headline number or None, what it is)
 OUTPUTS = (("margin_ascent_velocity", "max_ascent_velocity_ms"),
            ("margin_descent_velocity", "max_descent_velocity_ms"),
@@ -63,7 +65,7 @@ def indices(keys: list[str], groups: dict[str, list[str]], y, seed: int) -> dict
     whole = np.all(np.isfinite(y), axis=1)
     y = y[whole]
     out = {"n_used": int(y.shape[0]), "groups": {}}
-    if y.shape[0] < 8 or np.ptp(y) == 0:
+    if y.shape[0] < MIN_BASE or np.ptp(y) == 0:
         return out
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -272,6 +272,8 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
         if "study" in data:
             from flexlift.sweep.studies import study_distributions
 
+            base = _until_outcome(base, fixed, mc, f"{source}: study")
+
             base, study_dists, study = study_distributions(
                 data["study"], base, _mapping(mc.get("vary"), f"{source}: monte_carlo.vary"),
                 fixed, f"{source}: monte_carlo")
@@ -287,6 +289,19 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
 
 
 # --------------------------------------------------------------------------- the parts
+DURATION = "simulation.duration_s"
+
+
+def _until_outcome(base: Scenario, fixed: dict, mc: dict, where: str) -> Scenario:
+    """A study's base running each case until it has an outcome (``duration_s: auto``, at
+    most the schema's longest run) unless the SPEC sets or varies the duration itself: the
+    study draws slow breakouts (up to 2x nominal) a fixed duration would cut short."""
+    vary = mc.get("vary")
+    if DURATION in fixed or (isinstance(vary, dict) and DURATION in vary):
+        return base
+    return _changed(base, {DURATION: "auto"}, where)
+
+
 def _only(data: dict, allowed, where: str) -> None:
     for k in data:
         if k not in allowed:
@@ -438,6 +453,12 @@ def _monte_carlo(mc: dict, base: Scenario, fixed: dict, where: str, folder: Path
         raise InputError(f"{where}.method", brief(method, 40), "lhs (Latin hypercube, "
                          "scipy.stats.qmc), random (plain Monte Carlo) or sobol (Saltelli's "
                          "design for Sobol indices, SALib)")
+    if method == "sobol":
+        from flexlift.sweep.sobol import MIN_BASE
+
+        if samples < MIN_BASE:
+            raise InputError(f"{where}.samples (--samples)", samples, f"Sobol indices need at "
+                             f"least {MIN_BASE} base samples (N x (keys + 2) cases)")
     if study is not None:  # the study's laws, already parsed and checked
         _check_study_ends(base, study, mc["vary"], where)
         return samples, seed, method, dict(mc["vary"])

@@ -75,11 +75,14 @@ class SweepFolder:
 
     @classmethod
     @contextlib.contextmanager
-    def open(cls, target: str | os.PathLike, spec) -> Iterator[SweepFolder]:
+    def open(cls, target: str | os.PathLike, spec, command: str = COMMAND
+             ) -> Iterator[SweepFolder]:
         """Lock ``target``, check that it is new, empty or this SPEC's sweep, and prepare it
-        (raises :class:`~flexlift.output.folders.OutputError`, one line, otherwise)."""
+        (raises :class:`~flexlift.output.folders.OutputError`, one line, otherwise).
+        ``command`` is the command whose folder it is (``sweep``, ``contingency``): the name
+        a refusal gives it."""
         checksum = spec.checksum()
-        with incremental_folder(target, COMMAND, checksum, _Owns(checksum)) as inc:
+        with incremental_folder(target, command, checksum, _Owns(checksum)) as inc:
             folder = cls(inc, checksum)
             inc.claim("spec.yaml", "base.yaml", "cases")
             from flexlift.plumbing.atomic import write_text

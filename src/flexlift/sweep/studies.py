@@ -31,7 +31,9 @@ breakout_factor W': ``soil.breakout_force_factor`` u gives the case
 case's), so that H0 = u H0_nominal whatever the case's weight. A SPEC with ``study: salvage``
 may list, under ``monte_carlo.vary``, a law for any of these names (narrowing or widening a
 range; ``lift.bags.capacity_factor`` sets every bag's) or for any other scenario key (added);
-each law is checked against its variable's allowed range (:data:`ALLOWED`).
+each law is checked against its variable's allowed range (:data:`ALLOWED`). Each case runs
+until it has an outcome (``simulation.duration_s: auto``) unless the SPEC sets or varies the
+duration (:mod:`flexlift.sweep.spec`): the slow breakouts drawn here outlast a fixed run.
 """
 
 from __future__ import annotations

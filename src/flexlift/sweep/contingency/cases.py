@@ -107,6 +107,8 @@ def groups(plant, all_bags: bool) -> list[Group]:
 def check_kinds(kinds, plant) -> tuple[str, ...]:
     """The kinds asked for, checked: an unknown one, or one no bag of the plan has the part
     for, is one line."""
+    if not kinds:
+        raise InputError("--kinds", "", f"name at least one kind: {', '.join(KINDS)}")
     for k in kinds:
         if k not in KINDS:
             raise InputError("--kinds", k, f"use {', '.join(KINDS)}")

@@ -123,9 +123,14 @@ def _first(t: np.ndarray, mask: np.ndarray) -> float | None:
     return float(t[k[0]]) if k.size else None
 
 
-def parse_phases(words) -> tuple[tuple[str, ...], tuple[float, ...]]:
+def parse_phases(words, end_s: float | None = None
+                 ) -> tuple[tuple[str, ...], tuple[float, ...]]:
     """Phase names and user times from ``--phases`` words: a name of :data:`PHASES`, or a
-    time ``1800`` / ``t1800`` / ``1800s`` [s]. InputError (with the list) for anything else."""
+    time ``1800`` / ``t1800`` / ``1800s`` [s], at most ``end_s`` (the scenario's run length
+    [s], when given). InputError (with the list) for anything else, and for no word."""
+    if not words:
+        raise InputError("--phases", ",".join(map(str, words)), "name at least one phase: "
+                         f"{', '.join(PHASES)} or a time in seconds (e.g. 1800)")
     named, times = [], []
     for w in words:
         w = str(w).strip()
@@ -140,7 +145,9 @@ def parse_phases(words) -> tuple[tuple[str, ...], tuple[float, ...]]:
         except ValueError:
             raise InputError("--phases", w, f"use {', '.join(PHASES)} or a time in seconds "
                              "(e.g. 1800)") from None
-        if not math.isfinite(x) or x < 0:
-            raise InputError("--phases", w, "a time in seconds from 0 to the end of the run")
+        if not math.isfinite(x) or x < 0 or (end_s is not None and x > end_s):
+            upto = f"{end_s:g} s" if end_s is not None else "the end of the run"
+            raise InputError("--phases", w, f"a time in seconds from 0 to {upto} (the run's "
+                             "length, simulation.duration_s)")
         times.append(x)
     return tuple(named), tuple(dict.fromkeys(times))

@@ -45,7 +45,9 @@ class ContingencyResult:
     records: dict = field(default_factory=dict)
 
     @property
-    def tolerant(self) -> bool:
+    def tolerant(self) -> bool | None:
+        """True: single-failure tolerant; False: not; None: no verdict (no case ran, a case or
+        the fault-free run ended incomplete)."""
         return self.summary["tolerant"]
 
 
@@ -61,6 +63,9 @@ def plan_study(scenario, mode: str | None = None, phases=PHASES, times=(), kinds
     mode = mode or scenario.control.mode
     plant = plant_for(scenario, mode)
     kinds = check_kinds(KINDS if kinds is None else kinds, plant)
+    if not phases and not times:
+        raise InputError("--phases", "", f"name at least one phase: {', '.join(PHASES)} or a "
+                         "time in seconds")
     t0 = time.perf_counter()
     base = simulate(scenario, control=mode, plant=plant)
     plain_s = time.perf_counter() - t0
@@ -140,7 +145,7 @@ def run_contingency(scenario, out, mode: str | None = None, phases=PHASES, times
         spec = study_spec(scenario, mode, cases, f"contingency of {scenario.name}")
         names = {c.index: case_name(spec, c.index) for c in cases}
         worst = Worst(WORST, mode, list(base.criteria), agg.limits_of(scenario))
-        with SweepFolder.open(out, spec) as folder:
+        with SweepFolder.open(out, spec, "contingency") as folder:
             records = folder.finished(names)
             for i, r in records.items():  # resumed: their traces are run again if drawn
                 worst.offer(i, _answer(r, mode), {})
@@ -315,14 +320,27 @@ def _summary(scenario, mode, base, found, cases, names, groups, reps, answers, m
     fails = [r for r in rows if r["answer"]["outcome"] not in SURVIVED]
     fails.sort(key=lambda r: severity(answers[r["index"]], criteria, limits), reverse=True)
     bo = base.outcome
-    tolerant = not fails and bo.get("kind") in SURVIVED
-    if tolerant:
-        verdict = "single-failure tolerant"
-    elif not fails:
-        verdict = (f"the fault-free lift is itself {bo.get('kind')}: {bo.get('cause')}")
-    else:
+    short = sum(r["answer"]["outcome"] == "incomplete" for r in rows)
+    tolerant: bool | None = False
+    if bo.get("kind") == "incomplete":  # not a completed lift: nothing to set failures against
+        tolerant = None
+        verdict = (f"no verdict: the fault-free run is itself incomplete ({bo.get('cause')}), "
+                   "so it is no baseline for its failures")
+    elif bo.get("kind") != "safe":
+        verdict = f"the fault-free lift is itself {bo.get('kind')}: {bo.get('cause')}"
+    elif fails:
         verdict = (f"not single-failure tolerant: {len(fails)} of {len(cases)} single failures "
                    "are not survived")
+    elif not rows:
+        tolerant = None
+        verdict = "no verdict: no case ran (no phase was reached with a kind the plan has)"
+    elif short:
+        tolerant = None
+        verdict = (f"no verdict: {short} of {len(rows)} cases ended before the target was held "
+                   "(incomplete); simulation.duration_s: auto runs them until they end")
+    else:
+        tolerant = True
+        verdict = "single-failure tolerant"
     return {
         "flexlift": __version__, "scenario": scenario.name, "control": mode,
         "verdict": verdict, "tolerant": tolerant,
