@@ -40,3 +40,14 @@ def test_the_packaged_flag_is_strictly_boolean():
     assert catalogue.check_entry("b", dict(entry, as_published=True), "x", packaged=True)
     with pytest.raises(InputError, match="less than"):
         catalogue.check_entry("b", dict(entry, as_published=False), "x", packaged=True)
+
+
+@pytest.mark.parametrize("command", ["modes", "loads", "reduce", "fuzzy", "simulate", "run"])
+@pytest.mark.parametrize("name, needle", [
+    ("a" * 5000, "at most 3000 bytes are allowed"),
+    ("b" * 300, "at most 200 bytes per name are allowed"),
+])
+def test_an_overlong_out_is_one_line(tmp_path, capsys, command, name, needle):
+    out = tmp_path / name
+    assert main([command, "tanker", "--out", str(out)]) == 2
+    _one_line(capsys, "--out", str(tmp_path)[:40], needle)

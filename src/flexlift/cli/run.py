@@ -7,6 +7,7 @@ swapped in only when complete: an interrupted or failed run leaves the previous 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -15,6 +16,7 @@ from flexlift._jit import cache_is_warm
 from flexlift.cli._common import add_scenario_arg, emit_json, help_text, scenario_from
 from flexlift.output import output_folder, write_json, write_text
 from flexlift.output.controllers import copy_controller_files
+from flexlift.output.folders import check_target
 from flexlift.output.report import APPENDIX_PAGE, BODY_STAGES, render_appendix, render_report
 from flexlift.stages.run import (
     CONTROL_MODES,
@@ -132,6 +134,7 @@ def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
     out = args.out if args.out is not None else Path("flexlift-out") / scenario.name
     progress = Progress(quiet=args.quiet)
+    check_target(Path(os.path.abspath(out)), os.fspath(out))  # before any note or work
     if not args.quiet and "simulate" in args.stages and not cache_is_warm():
         progress.note("the ascent loop is compiled first (once after an install or a change "
                       "to it; about one to two minutes on two cores; `python -m "
