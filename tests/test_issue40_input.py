@@ -51,3 +51,47 @@ def test_an_overlong_out_is_one_line(tmp_path, capsys, command, name, needle):
     out = tmp_path / name
     assert main([command, "tanker", "--out", str(out)]) == 2
     _one_line(capsys, "--out", str(tmp_path)[:40], needle)
+
+
+def _scenario(tmp_path, text, name="s.yaml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return str(p)
+
+
+@pytest.mark.parametrize("text, needles", [
+    ("based_on: tanker\nlift:\n  rigging: {sling_length_m: 1000}\n",
+     ("lift.rigging.sling_length_m 1000 m", "less than 344.6 m", "water_depth_m 350 m")),
+    ("based_on: tanker\nlift:\n  rigging: {sling_length_m: 344.6}\n",
+     ("lift.rigging.sling_length_m 344.6 m",)),
+    ("based_on: tanker\nhull:\n  point_masses:\n    - {x_m: -5, mass_t: 10}\n",
+     ("point_masses[0].x_m = -5 m", "allowed [0, 78.02] m")),
+    ("based_on: tanker\nhull:\n  point_masses:\n    - {x_m: 78.1, mass_t: 10}\n",
+     ("point_masses[0].x_m = 78.1 m", "allowed [0, 78.02] m")),
+    ("based_on: tanker\nhull:\n  point_masses:\n    - {mass_t: 10}\n",
+     ("point_masses[0]", "exactly one of node", "x_m")),
+])
+def test_refused_at_load(tmp_path, capsys, text, needles):
+    assert main(["loads", _scenario(tmp_path, text)]) == 2
+    _one_line(capsys, *needles)
+
+
+def test_a_pipes_point_mass_off_the_line(tmp_path, capsys):
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "scenarios" / "pipeline.yaml").read_text()
+    text = text.replace("pipe:\n", "pipe:\n  point_masses: [{x_m: -5, mass_t: 10}]\n", 1)
+    assert main(["modes", _scenario(tmp_path, text, "p.yaml")]) == 2
+    _one_line(capsys, "point_masses[0].x_m = -5 m", "allowed [0, 1000] m")
+
+
+def test_a_point_mass_at_x_m_sits_at_the_nearest_node():
+    from flexlift.scenario import parse_scenario
+
+    by_x = parse_scenario({"based_on": "tanker",
+                           "hull": {"point_masses": [{"x_m": 78.02, "mass_t": 10}]}})
+    by_node = parse_scenario({"based_on": "tanker",
+                              "hull": {"point_masses": [{"node": 12, "mass_t": 10}]}})
+    pm = by_x.hull.point_masses[0]
+    assert pm.node_on(by_x.hull.length_m, by_x.hull.elements) == 12
+    assert by_x.hull_mass_t() == by_node.hull_mass_t()
