@@ -95,3 +95,35 @@ def test_a_point_mass_at_x_m_sits_at_the_nearest_node():
     pm = by_x.hull.point_masses[0]
     assert pm.node_on(by_x.hull.length_m, by_x.hull.elements) == 12
     assert by_x.hull_mass_t() == by_node.hull_mass_t()
+
+
+def test_a_fault_naming_an_unknown_bag_is_refused_before_any_stage(tmp_path, capsys):
+    path = _scenario(tmp_path, "based_on: tanker\nfaults:\n"
+                               "  - {kind: sling_break, bag: B01, time_s: 1}\n")
+    assert main(["run", path, "--out", str(tmp_path / "o")]) == 2
+    line = _one_line(capsys, "faults[0].bag", "'B01'", "bag_1, bag_2", "bag_7")
+    assert "[1/" not in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_runs_warnings_are_printed_once_with_where_the_rest_are(tmp_path, capsys,
+                                                                     monkeypatch):
+    import flexlift.cli.run as cli_run
+
+    real = cli_run.summary_of
+
+    def more(*a, **k):
+        s = real(*a, **k)
+        s["warnings"] = s["warnings"] + [f"extra warning {i}" for i in range(4)]
+        return s
+
+    monkeypatch.setattr(cli_run, "summary_of", more)
+    path = _scenario(tmp_path, "lift:\n  bag_lift_t: 450\n")
+    out = tmp_path / "o"
+    assert main(["run", path, "--stages", "modes,loads", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "5 warning(s)" in err
+    assert err.count("467 t short") == 1  # the library logged it too: printed once
+    assert "extra warning 0" in err and "extra warning 1" in err
+    assert "extra warning 2" not in err
+    assert f"... and 2 more warning(s): {out / 'summary.json'}" in err

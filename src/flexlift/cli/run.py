@@ -7,6 +7,7 @@ swapped in only when complete: an interrupted or failed run leaves the previous 
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 import time
@@ -44,6 +45,8 @@ def _csv_list(kind: str, allowed: tuple[str, ...]):
 #: the stages ``--stages`` may name: the analysis, and the single-failure study (not by
 #: default: it runs every single failure at every phase, flexlift.sweep.contingency)
 CLI_STAGES = (*STAGES, "contingency")
+
+log = logging.getLogger(__name__)
 
 
 def add_parser(sub) -> None:
@@ -128,6 +131,19 @@ def _contingency(scenario, tmp: Path, args, progress, k: int):
                      progress=lambda f: progress.bar(f, "single failures"))
 
 
+#: the warnings a finished run prints on the terminal (the rest: summary.json, the report)
+SHOWN_WARNINGS = 3
+
+
+def warning_lines(warnings: list, where: Path) -> list[str]:
+    """The first :data:`SHOWN_WARNINGS` warnings, one line each, and where the rest are."""
+    lines = [" ".join(str(w).split()) for w in warnings[:SHOWN_WARNINGS]]
+    if len(warnings) > SHOWN_WARNINGS:
+        lines.append(f"... and {len(warnings) - SHOWN_WARNINGS} more warning(s): {where} "
+                     "(warnings) and the report")
+    return lines
+
+
 def _main(args: argparse.Namespace) -> int:
     from flexlift.output.plots._style import figures_in_background
 
@@ -168,6 +184,8 @@ def _main(args: argparse.Namespace) -> int:
             f"done in {summary['elapsed_s']:.1f} s: {status[verdict]}, "
             f"{len(summary['warnings'])} warning(s)\nreport: {out / 'report.html'}\n"
         )
+        for line in warning_lines(summary["warnings"], out / "summary.json"):
+            log.warning(line)  # printed after the command, once (a library's own: not twice)
     return 1 if args.strict and summary["all_criteria_passed"] is False else 0
 
 
