@@ -127,3 +127,12 @@ def test_the_runs_warnings_are_printed_once_with_where_the_rest_are(tmp_path, ca
     assert "extra warning 0" in err and "extra warning 1" in err
     assert "extra warning 2" not in err
     assert f"... and 2 more warning(s): {out / 'summary.json'}" in err
+
+
+def test_a_pipes_fault_names_its_bags_briefly(tmp_path, capsys):
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "scenarios" / "pipeline.yaml").read_text()
+    text += "\nfaults:\n  - {kind: sling_break, bag: bag_1, time_s: 1}\n"
+    assert main(["modes", _scenario(tmp_path, text, "p.yaml")]) == 2
+    _one_line(capsys, "faults[0].bag: got 'bag_1'", "B01, B02, B03, B04, ..., B39, B40 (40 bags)")
