@@ -202,6 +202,17 @@ def test_scenario_reference_lists_every_key_with_its_range(site):
     assert not problems, "\n".join(problems)
 
 
+def test_scenario_reference_lists_the_catalogues_models(site):
+    from flexlift.scenario import catalogue
+
+    html = _page(site, "reference/scenario.md")
+    models = catalogue.builtin()
+    assert len(models) > 10
+    for name in models:
+        assert f"<code>{name}</code>" in html, f"scenario reference lacks catalogue model {name}"
+    assert "paper_cylinder_565t" in models
+
+
 def test_sweep_reference_lists_every_spec_key_and_distribution(site):
     from flexlift.sweep import distributions, spec
 

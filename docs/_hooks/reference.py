@@ -2,7 +2,9 @@
 
 A page holding the marker ``<!-- generated: scenario-keys -->`` gets one table per section of
 the scenario, walked from the pydantic models of :mod:`flexlift.scenario` (key, default,
-allowed range, meaning); ``<!-- generated: sweep-spec -->`` gets the SPEC file's keys and the
+allowed range, meaning); ``<!-- generated: bag-catalogue -->`` gets the packaged bag catalogue's models (the names
+``lift.catalogue_bag.model`` may give), from :mod:`flexlift.scenario.catalogue`;
+``<!-- generated: sweep-spec -->`` gets the SPEC file's keys and the
 distributions, from :mod:`flexlift.sweep.spec` and :mod:`flexlift.sweep.distributions`. The
 ranges and defaults are the schema's own, so the pages cannot drift from the code. The
 meanings come from ``docs/reference/scenario-keys.yaml`` (falling back to the comment beside
@@ -31,6 +33,7 @@ HERE = Path(__file__).resolve().parent
 MEANINGS = HERE.parent / "reference" / "scenario-keys.yaml"
 SCENARIO_MARKER = "<!-- generated: scenario-keys -->"
 SWEEP_MARKER = "<!-- generated: sweep-spec -->"
+CATALOGUE_MARKER = "<!-- generated: bag-catalogue -->"
 
 
 # --------------------------------------------------------------------------- numbers
@@ -326,10 +329,28 @@ def sweep_tables() -> str:
     return "\n".join(out)
 
 
+# --------------------------------------------------------------------------- bag catalogue
+def catalogue_table() -> str:
+    """The packaged bag catalogue (flexlift/data/bags.yaml): the names
+    ``lift.catalogue_bag.model`` may give, with each entry's type and size."""
+    from flexlift.scenario import catalogue
+
+    out = ["| `model` | type | lift [t] | diameter [m] | length [m] | relief [bar] | "
+           "dump valve [m3/s] | source |", "|---|---|---|---|---|---|---|---|"]
+    for name, e in catalogue.builtin().items():
+        cells = [num(e[k]) if e.get(k) is not None else "—" for k in
+                 ("lift_t", "diameter_m", "length_m", "relief_bar", "dump_valve_m3_s")]
+        out.append(f"| `{name}` | {e['type'].replace('_', ' ')} | {' | '.join(cells)} | "
+                   f"{_cell(e.get('source', ''))} |")
+    return "\n".join(out) + "\n"
+
+
 # --------------------------------------------------------------------------- the hook
 def on_page_markdown(markdown: str, page, config, files) -> str:
     if SCENARIO_MARKER in markdown:
         markdown = markdown.replace(SCENARIO_MARKER, scenario_tables())
+    if CATALOGUE_MARKER in markdown:
+        markdown = markdown.replace(CATALOGUE_MARKER, catalogue_table())
     if SWEEP_MARKER in markdown:
         markdown = markdown.replace(SWEEP_MARKER, sweep_tables())
     return markdown

@@ -29,7 +29,9 @@ def check_faults(scenario, names) -> None:
     """InputError for a fault that names an unknown bag."""
     for k, f in enumerate(scenario.faults):
         if f.bag not in names:
-            raise InputError(f"faults[{k}].bag", f.bag, f"known bags are {', '.join(names)}")
+            shown = (", ".join(names) if len(names) <= 10 else
+                     f"{', '.join(names[:4])}, ..., {', '.join(names[-2:])} ({len(names)} bags)")
+            raise InputError(f"faults[{k}].bag", f.bag, f"known bags are {shown}")
 
 
 def fault_step(fault, dt: float) -> int:

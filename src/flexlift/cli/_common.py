@@ -38,7 +38,22 @@ def scenario_from(args: argparse.Namespace) -> Scenario:
     """The scenario named on the command line, a user's hull given its default bag
     (loads/clusters.py: the largest standard size whose clusters fit), as the library's
     :func:`~flexlift.scenario.load_scenario` loads it."""
-    return load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario)
+    check_fault_bags(scenario)
+    return scenario
+
+
+def check_fault_bags(scenario: Scenario) -> None:
+    """InputError (one line) for a fault naming a bag the lift plan does not hold, before any
+    stage runs (the names come from the plan: ``bag_N`` on a hull, ``B01`` .. on a pipe)."""
+    if not getattr(scenario, "faults", None):  # none: nothing to check
+        return
+    from flexlift.ascent.faults import check_faults
+    from flexlift.loads.liftplan import plan_lift
+    from flexlift.structure.hull import hull_from_scenario
+
+    plan = plan_lift(scenario, hull_from_scenario(scenario))
+    check_faults(scenario, [b.name for b in plan.bags])
 
 
 def _field(key: str):

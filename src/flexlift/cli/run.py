@@ -7,6 +7,8 @@ swapped in only when complete: an interrupted or failed run leaves the previous 
 from __future__ import annotations
 
 import argparse
+import logging
+import os
 import sys
 import time
 from pathlib import Path
@@ -15,6 +17,7 @@ from flexlift._jit import cache_is_warm
 from flexlift.cli._common import add_scenario_arg, emit_json, help_text, scenario_from
 from flexlift.output import output_folder, write_json, write_text
 from flexlift.output.controllers import copy_controller_files
+from flexlift.output.folders import check_target
 from flexlift.output.report import APPENDIX_PAGE, BODY_STAGES, render_appendix, render_report
 from flexlift.stages.run import (
     CONTROL_MODES,
@@ -42,6 +45,8 @@ def _csv_list(kind: str, allowed: tuple[str, ...]):
 #: the stages ``--stages`` may name: the analysis, and the single-failure study (not by
 #: default: it runs every single failure at every phase, flexlift.sweep.contingency)
 CLI_STAGES = (*STAGES, "contingency")
+
+log = logging.getLogger(__name__)
 
 
 def add_parser(sub) -> None:
@@ -126,12 +131,26 @@ def _contingency(scenario, tmp: Path, args, progress, k: int):
                      progress=lambda f: progress.bar(f, "single failures"))
 
 
+#: the warnings a finished run prints on the terminal (the rest: summary.json, the report)
+SHOWN_WARNINGS = 3
+
+
+def warning_lines(warnings: list, where: Path) -> list[str]:
+    """The first :data:`SHOWN_WARNINGS` warnings, one line each, and where the rest are."""
+    lines = [" ".join(str(w).split()) for w in warnings[:SHOWN_WARNINGS]]
+    if len(warnings) > SHOWN_WARNINGS:
+        lines.append(f"... and {len(warnings) - SHOWN_WARNINGS} more warning(s): {where} "
+                     "(warnings) and the report")
+    return lines
+
+
 def _main(args: argparse.Namespace) -> int:
     from flexlift.output.plots._style import figures_in_background
 
     scenario = scenario_from(args)
     out = args.out if args.out is not None else Path("flexlift-out") / scenario.name
     progress = Progress(quiet=args.quiet)
+    check_target(Path(os.path.abspath(out)), os.fspath(out))  # before any note or work
     if not args.quiet and "simulate" in args.stages and not cache_is_warm():
         progress.note("the ascent loop is compiled first (once after an install or a change "
                       "to it; about one to two minutes on two cores; `python -m "
@@ -165,6 +184,8 @@ def _main(args: argparse.Namespace) -> int:
             f"done in {summary['elapsed_s']:.1f} s: {status[verdict]}, "
             f"{len(summary['warnings'])} warning(s)\nreport: {out / 'report.html'}\n"
         )
+        for line in warning_lines(summary["warnings"], out / "summary.json"):
+            log.warning(line)  # printed after the command, once (a library's own: not twice)
     return 1 if args.strict and summary["all_criteria_passed"] is False else 0
 
 

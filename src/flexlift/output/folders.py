@@ -84,8 +84,31 @@ def _contents(folder: Path) -> set[str]:
     return _all_contents(folder) - {JOURNAL}
 
 
+#: the longest name of the output folder and of each folder above it [bytes, UTF-8]: the
+#: system's 255 less the hidden siblings' ``.NAME.partial-RUN`` (and lock) decorations
+NAME_MAX = 200
+#: the longest absolute path of the output folder [bytes, UTF-8]: the system's 4096 less room
+#: for the files and folders written inside it
+PATH_MAX = 3000
+
+
+def check_length(final: Path, shown: str) -> None:
+    """Raise :class:`OutputError` when the absolute ``final`` or one of its names is longer
+    than :data:`PATH_MAX` / :data:`NAME_MAX` (the system would refuse it mid-run)."""
+    size = len(os.fsencode(final))
+    if size > PATH_MAX:
+        raise _refuse(shown[:60] + "...", f"is a path of {size} bytes; at most {PATH_MAX} "
+                                          "bytes are allowed; choose a shorter --out")
+    for part in final.parts:
+        if len(os.fsencode(part)) > NAME_MAX:
+            raise _refuse(shown[:60] + "...", f"holds a name of {len(os.fsencode(part))} bytes; "
+                                              f"at most {NAME_MAX} bytes per name are allowed; "
+                                              "choose a shorter --out")
+
+
 def check_target(final: Path, shown: str) -> None:
     """Raise :class:`OutputError` unless ``final`` may be (re)placed by a flexlift output."""
+    check_length(final, shown)
     cwd = Path.cwd().resolve()
     if final == cwd or cwd.is_relative_to(final):
         raise _refuse(shown, "is the current folder (or holds it); choose a sub-folder, "
@@ -314,6 +337,7 @@ class Incremental:
 
 
 def _check_place(final: Path, shown: str) -> None:
+    check_length(final, shown)
     cwd = Path.cwd().resolve()
     if final == cwd or cwd.is_relative_to(final):
         raise _refuse(shown, "is the current folder (or holds it); choose a sub-folder")

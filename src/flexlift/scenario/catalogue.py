@@ -83,18 +83,29 @@ def _num(v) -> bool:
     return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def check_entry(name: str, entry, source: str) -> dict:
+def check_entry(name: str, entry, source: str, packaged: bool = False) -> dict:
     """``entry`` checked: the required fields, positive numbers, a known type, and a body
     that holds the rated volume (unless ``as_published``: the paper's cylinder is kept as
-    published and says so). An InputError of one line otherwise."""
+    published and says so). ``as_published`` belongs to the packaged catalogue only
+    (``packaged``) and is strictly ``true``/``false`` there; a user's entry giving it is
+    refused. An InputError of one line otherwise."""
     where = f"{source}: bag {clean(str(name), 60)}"
     if not isinstance(entry, dict):
         raise InputError.from_line(f"{where}: an entry must be a mapping of fields "
                                    f"({', '.join(REQUIRED)}, ...)")
-    unknown = sorted(set(entry) - set(FIELDS))
+    fields = FIELDS if packaged else tuple(f for f in FIELDS if f != "as_published")
+    if "as_published" in entry and not packaged:
+        raise InputError.from_line(
+            f"{where}: as_published = {clean(str(entry['as_published']), 40)} is for the "
+            "packaged catalogue only; remove it (a body must hold its rated volume)")
+    if packaged and not isinstance(entry.get("as_published", False), bool):
+        raise InputError.from_line(f"{where}: as_published = "
+                                   f"{clean(str(entry['as_published']), 40)} must be true or "
+                                   "false")
+    unknown = sorted(set(entry) - set(fields))
     if unknown:
         raise InputError.from_line(f"{where}: unknown field {clean(str(unknown[0]), 40)}; the "
-                                   f"fields are {', '.join(FIELDS)}")
+                                   f"fields are {', '.join(fields)}")
     for f in REQUIRED:
         if entry.get(f) is None:
             raise InputError.from_line(f"{where}: {f} is missing (required: "
@@ -113,7 +124,7 @@ def check_entry(name: str, entry, source: str) -> dict:
         raise InputError.from_line(
             f"{where}: cone_top_m = {cone:g} m is the conical top of an upright (parachute) "
             f"bag, less than its length_m ({entry['length_m']:g} m)")
-    if not entry.get("as_published") and body_volume(entry) < rated_volume(entry) * (1 - 1e-3):
+    if entry.get("as_published") is not True and body_volume(entry) < rated_volume(entry) * (1 - 1e-3):
         raise InputError.from_line(
             f"{where}: a body of {entry['diameter_m']:g} m x {entry['length_m']:g} m holds "
             f"{body_volume(entry):.3g} m3, less than the {rated_volume(entry):.3g} m3 of gas its "
@@ -121,7 +132,7 @@ def check_entry(name: str, entry, source: str) -> dict:
     return dict(entry)
 
 
-def _parse(text: str, source: str) -> dict:
+def _parse(text: str, source: str, packaged: bool = False) -> dict:
     from flexlift.scenario.file import load_yaml
 
     data = load_yaml(text, source)
@@ -129,7 +140,7 @@ def _parse(text: str, source: str) -> dict:
     if not isinstance(bags, dict) or not bags:
         raise InputError.from_line(f"{source}: a bag catalogue is a mapping `bags:` of named "
                                    "entries (type, lift_t, diameter_m, length_m, ...)")
-    return {str(k): check_entry(k, v, source) for k, v in bags.items()}
+    return {str(k): check_entry(k, v, source, packaged) for k, v in bags.items()}
 
 
 _BUILTIN: dict | None = None
@@ -140,7 +151,7 @@ def builtin() -> dict:
     global _BUILTIN
     if _BUILTIN is None:
         text = (resources.files("flexlift") / "data" / "bags.yaml").read_text()
-        _BUILTIN = _parse(text, "flexlift/data/bags.yaml")
+        _BUILTIN = _parse(text, "flexlift/data/bags.yaml", packaged=True)
     return dict(_BUILTIN)
 
 

@@ -20,6 +20,7 @@ from flexlift.scenario.types import (
     MAX_LENGTH_M,
     MAX_MASS_T,
     Name,
+    Real,
     real,
     whole,
 )
@@ -65,7 +66,7 @@ class PipeSegment(_Section):
 class PipePointMass(_Section):
     """A valve, tee or PLET: a lumped mass at ``x_m`` (moved to the nearest node)."""
 
-    x_m: real(0, MAX_LENGTH_M)
+    x_m: Real  # [m] from the start of the line; its range 0 .. length_m is the pipe's check
     mass_t: real(0.001, MAX_MASS_T)
 
 
@@ -119,9 +120,10 @@ class Pipe(_Section):
             _wall_inside(f"segments[{k}] ", D, t)
             if s.to_m > L:
                 raise ValueError(f"segments[{k}] to_m {s.to_m} m is off the line (length_m {L} m)")
-        for p in self.point_masses:
-            if p.x_m > L:
-                raise ValueError(f"point mass at x_m {p.x_m} m is off the line (0..{L} m)")
+        for k, p in enumerate(self.point_masses):
+            if not 0 <= p.x_m <= L:
+                raise ValueError(f"point_masses[{k}].x_m = {p.x_m:g} m is off the line; "
+                                 f"allowed [0, {L:g}] m (0 .. length_m)")
         lp = self.lift_points
         if lp is not None and lp.positions_m is not None:
             off = [x for x in lp.positions_m if x > L]

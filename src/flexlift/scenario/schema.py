@@ -85,10 +85,16 @@ class Environment(_Section):
 
 # --------------------------------------------------------------------------- hull
 class PointMass(_Section):
-    """A lumped mass at a node (1-based, from the aft end)."""
+    """A lumped mass at a ``node`` (1-based, from the aft end) or at ``x_m`` from the aft end
+    (0 .. length_m, moved to the nearest node); exactly one of the two."""
 
-    node: whole(1, MAX_ELEMENTS + 1)
+    node: whole(1, MAX_ELEMENTS + 1) | None = None
+    x_m: Real | None = None  # [m] from the aft end; its range 0 .. length_m is the hull's check
     mass_t: real(0.001, MAX_MASS_T)  # 1 kg .. the heaviest structure
+
+    def node_on(self, length_m: float, elements: int) -> int:
+        """The node (1-based) the mass sits at on a hull of ``length_m`` [m] in ``elements``."""
+        return self.node if self.node is not None else round(self.x_m / length_m * elements) + 1
 
 
 Length = real(0.1, MAX_LENGTH_M)
@@ -139,8 +145,14 @@ class Hull(_Section):
                     f"{name} has {len(v)} values; give one value or one per element "
                     f"({self.elements})"
                 )
-        for pm in self.point_masses:
-            if pm.node > self.elements + 1:
+        for k, pm in enumerate(self.point_masses):
+            if (pm.node is None) == (pm.x_m is None):
+                raise ValueError(f"point_masses[{k}]: give exactly one of node (1.."
+                                 f"{self.elements + 1}) or x_m (0..{self.length_m:g} m)")
+            if pm.x_m is not None and not 0 <= pm.x_m <= self.length_m:
+                raise ValueError(f"point_masses[{k}].x_m = {pm.x_m:g} m is off the hull; "
+                                 f"allowed [0, {self.length_m:g}] m (0 .. length_m)")
+            if pm.node is not None and pm.node > self.elements + 1:
                 raise ValueError(
                     f"point_masses node {pm.node} does not exist; nodes are 1..{self.elements + 1}"
                 )
@@ -606,6 +618,13 @@ class Scenario(_Section):
                 f"control.target_height_m {self.control.target_height_m} m must be below the "
                 f"water depth {env.water_depth_m} m (the target is above the seabed)"
             )
+        sling, deck = self.lift.rigging.sling_length_m, self.hull.depth_m
+        if sling > 0 and sling + deck >= env.water_depth_m:
+            raise ValueError(
+                f"lift.rigging.sling_length_m {sling:g} m must be less than "
+                f"{env.water_depth_m - deck:g} m (environment.water_depth_m {env.water_depth_m:g}"
+                f" m less hull.depth_m {deck:g} m): longer, a bag's mouth is above the surface "
+                "with the hull still on the seabed")
         if sim.time_step_s > 1.0 / self.control.sample_rate_Hz + 1e-12:
             raise ValueError(
                 f"simulation.time_step_s {sim.time_step_s} s must not exceed the "

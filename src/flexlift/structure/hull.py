@@ -166,7 +166,7 @@ def hull_from_scenario(scenario, elements: int | None = None) -> Hull:
     EI = np.broadcast_to(np.asarray(h.bending_stiffness_Nm2, dtype=float), (n,)).copy()
     pm = np.zeros(n + 1)
     for p in h.point_masses:
-        pm[p.node - 1] += p.mass_t * C.TONNE
+        pm[p.node_on(h.length_m, n) - 1] += p.mass_t * C.TONNE
     rho = None
     if getattr(scenario, "pipe", None) is not None:
         from flexlift.physics.pipe import element_density
