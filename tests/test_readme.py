@@ -26,7 +26,10 @@ def test_quick_start_has_exactly_the_two_commands():
     assert commands == ["./dev run", "./dev test"]
     dev = (ROOT / "dev").read_text()
     assert 'exec "$venv/bin/flexlift" run' in dev  # `./dev run` is `flexlift run`
-    assert (ROOT / ".ci" / "run").read_text().rstrip().endswith("exec ./dev test")
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert "\n./dev test 2>&1 | tee" in ci   # CI runs the README's test command first
+    # and then the README's run command on a fresh clone with the oldest Python, env -i
+    assert '"$fresh/flexlift/dev" run' in ci and "env -i PATH=" in ci
 
 
 def test_readme_is_short_with_one_picture_and_links_that_exist():
