@@ -114,3 +114,25 @@ def test_dev_with_no_python_at_all_says_so(tmp_path):
     assert done.returncode == 2
     assert done.stderr.strip().splitlines() == [done.stderr.strip()]
     assert "found no Python" in done.stderr
+
+
+def test_a_failed_install_says_so_and_leaves_nothing_running(tmp_path):
+    """pip failing (here: a lock naming a file that is not there) ends ./dev in one sentence with
+    exit 1, and the background "still installing" line is stopped with it (issue 40: the trap
+    failed under set -u and the ticker kept printing after the prompt had returned)."""
+    import sys
+    (tmp_path / "dev").write_text((ROOT / "dev").read_text())
+    (tmp_path / "dev").chmod(0o755)
+    (tmp_path / "requirements").mkdir()
+    (tmp_path / "requirements" / "run.lock").write_text(
+        f"{tmp_path / 'absent-0.0-py3-none-any.whl'} --hash=sha256:{'0' * 64}\n")
+    (tmp_path / "pyproject.toml").write_text("")
+    python = getattr(sys, "_base_executable", sys.executable)
+    done = subprocess.run([str(tmp_path / "dev"), "run"], capture_output=True, text=True,
+                          timeout=60, env={"PATH": "/usr/bin:/bin", "HOME": str(tmp_path),
+                                            "PYTHON": python})
+    assert done.returncode == 1, done.stderr
+    assert "pip could not install requirements/run.lock" in done.stderr.strip().splitlines()[-1]
+    assert "unbound variable" not in done.stderr
+    left = subprocess.run(["pgrep", "-f", str(tmp_path / "dev")], capture_output=True, text=True)
+    assert left.stdout.strip() == ""
