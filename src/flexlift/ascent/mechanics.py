@@ -98,10 +98,11 @@ def bag_forces(plant, V, zd, attached, current, point):
 
 
 @jit
-def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, active):
+def strip_loads(plant, q, v, holding, sep, current, noise, w, wv, line, contact, active):
     """Strip motion (w [m], wv [m/s]), the explicit line loads (drag, noise, released
     suction) and the contact line loads [N/m], and which strips are in contact (``active``:
-    their springs go into the implicit step). Returns the lowest strip height [m]."""
+    their springs go into the implicit step), with each group's ``holding`` force H [N].
+    Returns the lowest strip height [m]."""
     strips = plant.strips
     matvec_t2(strips.shape_t, q, v, w, wv)
     # the plant's arrays taken once: read through the struct inside the loop, each element's
@@ -116,7 +117,7 @@ def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, activ
         ws, wvs = w[s], wv[s]
         load = drag(wvs - current, coeff[s]) + noise[s]
         if not held:
-            load -= H[g] * hold[s]
+            load -= holding[g] * hold[s]
         line[s] = load
         if held or ws < 0.0:
             k, c = stiffness[s], damping[s]

@@ -39,12 +39,12 @@ class Profile:
     limit_from: float | None
 
 
-def speed_limit(z, V, capacity, purge_max, eta, water_depth, p_atm, rho_g):
-    """v_max(z) [m/s] of a bag with gas volume ``V`` [m^3] (of ``capacity``) at heights ``z``
-    [m]: the speed at which its expansion takes ``eta`` of the purge capacity."""
+def speed_limit(z, volume, capacity, purge_max, eta, water_depth, p_atm, rho_g):
+    """v_max(z) [m/s] of a bag with gas volume ``volume`` [m^3] (of ``capacity``) at heights
+    ``z`` [m]: the speed at which its expansion takes ``eta`` of the purge capacity."""
     p = ambient_pressure(np.asarray(z, dtype=float), water_depth, p_atm, rho_g)
-    q = eta * purge_flow(1.0, V, capacity, purge_max)
-    return q / expansion_rate(V, p, rho_g, 1.0)
+    q = eta * purge_flow(1.0, volume, capacity, purge_max)
+    return q / expansion_rate(volume, p, rho_g, 1.0)
 
 
 @jit
