@@ -247,27 +247,29 @@ def _leading_max(E: np.ndarray) -> np.ndarray:
     return np.maximum.accumulate(np.tril(np.maximum(a, a.T)).max(axis=1))
 
 
-def orthonormalised(M, lam, Y, Z=None, K=None):
+def orthonormalised(mass, lam, shapes, coords=None, stiffness=None):
     """M-orthonormalise the columns of Y (a Cholesky factor of their Gram matrix, lowest mode
     first) and check them: returns lam, Y and err, where err[k] is the largest
     |Y^T K Y - diag(lam)|_ij / max(lam_i, lam_j) over modes i, j <= k [-].
 
-    M : (scaled) mass matrix; lam : (k,) eigenvalues [rad^2/s^2], ascending; Y : (N, k)
-    shapes; Z : (2 n_el, k) their stiffness coordinates (Y^T K Y = Z^T Z), or None to use
-    the assembled (scaled) stiffness K. Columns from the first one that is linearly
-    dependent on those before it (no Cholesky factor) are dropped.
+    mass : the (scaled) mass matrix M; lam : (k,) eigenvalues [rad^2/s^2], ascending;
+    shapes : (N, k) the shapes Y; coords : (2 n_el, k) their stiffness coordinates Z
+    (Y^T K Y = Z^T Z), or None to use ``stiffness``, the assembled (scaled) stiffness K.
+    Columns from the first one that is linearly dependent on those before it (no Cholesky
+    factor) are dropped.
     """
-    G = _gram(Y, np.asarray(M @ Y))
-    GK = _gram(Z) if Z is not None else _gram(Y, np.asarray(K @ Y))
+    G = _gram(shapes, np.asarray(mass @ shapes))
+    GK = (_gram(coords) if coords is not None
+          else _gram(shapes, np.asarray(stiffness @ shapes)))
     d = 1.0 / np.sqrt(np.diag(G))  # unit columns first: G = I + (loss of orthogonality)
     G = G * np.outer(d, d)
     U, info = sla.lapack.dpotrf(G, lower=0, clean=1)
     k = lam.size if info == 0 else info - 1
     if k == 0:
-        return lam[:0], Y[:, :0], np.zeros(0)
+        return lam[:0], shapes[:, :0], np.zeros(0)
     if info:  # factor the leading block that is positive definite
         U, _ = sla.lapack.dpotrf(G[:k, :k], lower=0, clean=1)
-    lam, Yd, GK = lam[:k], Y[:, :k] * d[:k], GK[:k, :k] * np.outer(d[:k], d[:k])
+    lam, Yd, GK = lam[:k], shapes[:, :k] * d[:k], GK[:k, :k] * np.outer(d[:k], d[:k])
     if k <= _FEW_COLUMNS:
         T = sla.lapack.dtrtri(U)[0]  # U^-1 (a few columns: explicit, no BLAS on tall Y)
         Y = np.einsum("nk,kj->nj", Yd, T)
@@ -371,7 +373,7 @@ def shift_invert_flexible(
     order = np.argsort(nu)
     Y = Y[:, order]
     Y = Y - Rs @ (MR.T @ Y)
-    nu, Y, err = orthonormalised(Ms, nu[order], Y, K=Ks)
+    nu, Y, err = orthonormalised(Ms, nu[order], Y, stiffness=Ks)
     return nu * lam_scale, dof_scale(hull)[:, None] * Y / np.sqrt(m_ref), err
 
 
