@@ -138,7 +138,7 @@ MUTATIONS = (
       "+ drag(zd[i] - current, bags.drag[i])", "- drag(zd[i] - current, bags.drag[i])",
       "bag drag along the motion instead of against it"),
     M("buoyancy-capacity", "ascent/mechanics.py",
-      "point[i] = (buoyancy(V[i], bags.rho_g)", "point[i] = (buoyancy(bags.capacity[i], bags.rho_g)",
+      "point[i] = (buoyancy(volume[i], bags.rho_g)", "point[i] = (buoyancy(bags.capacity[i], bags.rho_g)",
       "bags lift their full capacity, not their gas volume"),
     M("sling-break", "ascent/mechanics.py",
       "bags.drag[i])) * attached[i]", "bags.drag[i]))",
@@ -163,7 +163,7 @@ MUTATIONS = (
       "    matvec_add(bags.corr_shape, f_point, z)\n", "",
       "the recorded heights without the eliminated modes' response to the bag forces"),
     M("uplift-sling", "ascent/recording.py",
-      "total += bags.rho_g * V[i] * attached[i]", "total += bags.rho_g * V[i]",
+      "total += bags.rho_g * volume[i] * attached[i]", "total += bags.rho_g * volume[i]",
       "the hold's uplift still counts a broken sling's bag"),
     # ------------------------------------------------------------------ gas and hold in the loop
     M("purge-orifice-loop", "ascent/kernel.py",

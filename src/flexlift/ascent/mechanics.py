@@ -46,13 +46,13 @@ def bag_motion(plant, q, v, z, zd):
 
 
 @inline_jit
-def bag_gas(plant, n, z, p, V):
-    """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V (at the surface the
-    part below the waterline: :func:`lifting_volume`)."""
+def bag_gas(plant, n, z, p, volume):
+    """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p and ``volume`` (at the
+    surface the part below the waterline: :func:`lifting_volume`)."""
     bags = plant.bags
     for i in range(n.size):
         p[i] = ambient_pressure(z[i], bags.water_depth, bags.p_atm, bags.rho_g)
-        V[i] = lifting_volume(plant, i, gas_volume(n[i], p[i], bags.RT, bags.capacity[i]), z[i])
+        volume[i] = lifting_volume(plant, i, gas_volume(n[i], p[i], bags.RT, bags.capacity[i]), z[i])
 
 
 @inline_jit
@@ -89,12 +89,12 @@ def tipped_spill(plant, i, n, p, z):
 
 
 @inline_jit
-def bag_forces(plant, V, zd, attached, current, point):
+def bag_forces(plant, volume, zd, attached, current, point):
     """Force of every bag on the structure [N], into ``point``: buoyancy minus the bag's drag
     on its speed relative to the ``current`` [m/s], nothing once its sling is broken."""
     bags = plant.bags
-    for i in range(V.size):
-        point[i] = (buoyancy(V[i], bags.rho_g) + drag(zd[i] - current, bags.drag[i])) * attached[i]
+    for i in range(volume.size):
+        point[i] = (buoyancy(volume[i], bags.rho_g) + drag(zd[i] - current, bags.drag[i])) * attached[i]
 
 
 @jit
