@@ -72,13 +72,14 @@ def _pass(v, step, first, stop, by):
         prev = v[i]
 
 
-def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth, p_atm,
+def valve_profile(target, speed, accel, volume, capacity, purge_max, eta, water_depth, p_atm,
                   rho_g) -> Profile | None:
     """The fastest ascent to ``target`` [m] within ``speed`` [m/s], ``accel`` [m/s^2] and
-    the tightest bag's :func:`speed_limit` (``V``, ``capacity``, ``purge_max``: arrays over
-    the bags, ``purge_max`` each bag's dump valve); None when the limit never binds."""
+    the tightest bag's :func:`speed_limit` (``volume`` [m^3], ``capacity``, ``purge_max``:
+    arrays over the bags, ``purge_max`` each bag's dump valve); None when the limit never
+    binds."""
     z = np.linspace(0.0, target, HEIGHTS)
-    V = np.atleast_1d(V)
+    V = np.atleast_1d(volume)
     q = np.broadcast_to(np.asarray(purge_max, dtype=float), V.shape)
     lim = np.min([speed_limit(z, v, c, qi, eta, water_depth, p_atm, rho_g)
                   for v, c, qi in zip(V, np.atleast_1d(capacity), q)], axis=0)
