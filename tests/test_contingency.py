@@ -297,6 +297,29 @@ def test_noise_runs_every_bag_and_the_parts_decide_the_kinds():
     assert kinds_of(False) == ("bag_rupture",)
 
 
+def test_a_fill_valve_stuck_closed_is_a_kind_of_the_study_run_as_its_fault(tmp_path):
+    """The commoner field failure is in the default kinds (an external bag's, after the stuck-
+    open fill valve), and a study of it runs each case as that fault: its rerun file holds it
+    and its answer is simulate's on that file."""
+    from flexlift.sweep.contingency.cases import KIND_TEXT, KINDS, PART, kinds_of
+
+    kind = "fill_valve_stuck_closed"
+    assert kind in KINDS and kind in kinds_of(True) and kind not in kinds_of(False)
+    assert KINDS.index(kind) == KINDS.index("fill_valve_stuck_open") + 1
+    assert KIND_TEXT[kind] == "fill valve stuck closed" and PART[kind] == "fill valve"
+    out = tmp_path / "closed"
+    s = study(clusters(6), out, kinds=[kind], phases=["mid"], margins=False)
+    assert s["n_cases"] == 4
+    for c in s["cases"]:
+        assert c["fault"]["kind"] == kind
+        sc = load_scenario(out / c["rerun"])
+        assert [f.model_dump() for f in sc.faults] == [c["fault"]]
+        r = simulate(sc)
+        if c["answer"]["validity_end_s"] is None:
+            assert c["answer"]["outcome"] == r.outcome["kind"]
+            assert c["answer"]["up_ms"] == r.headline["max_ascent_velocity_ms"]
+
+
 def test_a_case_stopped_beyond_validity_has_the_answer_of_the_whole_run():
     """The tanker losing bag_2's sling at the near_target phase passes the slope's validity:
     the run stopped there (``stop_beyond``, as every case runs) is shorter and its answer is

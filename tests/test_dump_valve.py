@@ -122,9 +122,9 @@ def test_the_planned_profile_takes_each_bags_own_valve():
     0.4 m3/s on 20 m3), and not the one the valves swapped would give."""
     args = dict(target=60.0, speed=0.2, accel=0.002, eta=0.8, water_depth=70.0,
                 p_atm=101325.0, rho_g=1025.0 * 9.81)
-    both = valve_profile(V=[40.0, 20.0], capacity=[48.8, 48.8], purge_max=[0.1, 0.4], **args)
-    tight = valve_profile(V=[40.0], capacity=[48.8], purge_max=[0.1], **args)
-    swapped = valve_profile(V=[40.0, 20.0], capacity=[48.8, 48.8], purge_max=[0.4, 0.1], **args)
+    both = valve_profile(volume=[40.0, 20.0], capacity=[48.8, 48.8], purge_max=[0.1, 0.4], **args)
+    tight = valve_profile(volume=[40.0], capacity=[48.8], purge_max=[0.1], **args)
+    swapped = valve_profile(volume=[40.0, 20.0], capacity=[48.8, 48.8], purge_max=[0.4, 0.1], **args)
     assert tight is not None and both.duration == tight.duration
     assert swapped.duration != pytest.approx(both.duration, rel=1e-3)
 

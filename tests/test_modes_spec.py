@@ -128,11 +128,12 @@ def test_orthonormalised_checks_and_drops_dependent_columns():
     K = sp.diags(rng.uniform(1.0, 2.0, 12) * 1e3)
     lam, Y = np.array([1.0, 2.0, 3.0, 4.0]), rng.standard_normal((12, 4))
     Y[:, 2] = 3.0 * Y[:, 0]  # linearly dependent: no Cholesky factor from column 3 on
-    lam2, Y2, err = orthonormalised(M, lam, Y, K=K)
+    lam2, Y2, err = orthonormalised(M, lam, Y, stiffness=K)
     assert lam2.size == Y2.shape[1] == err.size == 2
     np.testing.assert_allclose(Y2.T @ (M @ Y2), np.eye(2), atol=1e-14)
     assert err[-1] > 1.0  # random vectors are no eigenvectors: the check says so
     # exact eigenvectors pass
-    lam_e, Y_e, err_e = orthonormalised(M, K.diagonal() / M.diagonal(), np.eye(12) * 5.0, K=K)
+    lam_e, Y_e, err_e = orthonormalised(M, K.diagonal() / M.diagonal(), np.eye(12) * 5.0,
+                                     stiffness=K)
     np.testing.assert_allclose(Y_e.T @ (M @ Y_e), np.eye(12), atol=1e-15)
     assert err_e[-1] < 1e-15

@@ -515,6 +515,45 @@ def test_a_supply_failure_fault_stops_filling(plant):
     assert np.all(ds.fill_rate.sel(bag="bag_2").values == 0.0)
 
 
+def test_a_fill_valve_stuck_closed_stops_that_bags_fill_from_its_step(plant):
+    """From 10 s bag_2's fill valve is stuck closed: its gas (p V, Boyle at the sea's
+    temperature) does not grow after the fault's step while the open-loop commands still ask
+    for fill; the other bags' commands are those of the run without the fault, to the bit, and
+    their gas too (within the cm the hull moves on the seabed). Its purge still works."""
+    t_f = 10.0
+    fault = {"kind": "fill_valve_stuck_closed", "bag": "bag_2", "time_s": t_f}
+    sc = SC.with_changes(**QUICK)
+    r = simulate(sc.with_changes(faults=[fault]), control="open-loop", duration=30.0,
+                 plant=plant)
+    free = simulate(sc, control="open-loop", duration=30.0, plant=plant)
+    ds, ds0 = r.dataset, free.dataset
+    t = ds.time.values
+    k0 = int(np.searchsorted(t, t_f))
+    assert t[k0] == t_f  # the fault's step starts at an output sample
+    env = SC.environment
+
+    def gas(d, bag):  # p V of the bag [Pa m^3], proportional to its moles
+        p = env.atmospheric_pressure_Pa + RHO_G * (env.water_depth_m - d.height.sel(bag=bag))
+        return (p * d.gas_volume.sel(bag=bag)).values
+
+    pv, pv0 = gas(ds, "bag_2"), gas(ds0, "bag_2")
+    np.testing.assert_array_equal(pv[: k0 + 1], pv0[: k0 + 1])  # the same up to the step
+    # then no gas in: p V per 1 s sample within 1e-8 (p from the point's recorded height;
+    # one sample of the free fill is ~1e-3 of it)
+    assert np.all(np.diff(pv[k0:]) <= 1e-8 * pv[k0])
+    assert pv0[k0 + 1] > pv[k0 + 1] and pv0[-1] > 1.01 * pv[-1]  # which the free bag takes
+    q = ds.fill_rate.sel(bag="bag_2").values
+    assert np.all(q[t > t_f] == 0.0) and np.all(ds0.fill_rate.sel(bag="bag_2").values[t > t_f] > 0)
+    others = [b for b in ds.bag.values if b != "bag_2"]
+    for var in ("fill_rate", "purge_opening"):
+        np.testing.assert_array_equal(ds[var].sel(bag=others).values,
+                                      ds0[var].sel(bag=others).values)
+    for b in others:
+        np.testing.assert_allclose(gas(ds, b), gas(ds0, b), rtol=1e-6)
+    np.testing.assert_array_equal(ds.purge_opening.sel(bag="bag_2").values,
+                                  ds0.purge_opening.sel(bag="bag_2").values)
+
+
 def test_a_rupture_fault_leaks_at_its_leak_time(plant):
     fault = {"kind": "bag_rupture", "bag": "bag_5", "time_s": 0.0, "leak_time_s": 20.0}
     r = simulate(SC.with_changes(**QUICK, faults=[fault]), control="open-loop", duration=20.0,

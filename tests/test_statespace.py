@@ -147,7 +147,7 @@ def test_frequency_response_matches_direct_solve_and_control(mimo):
 
 def test_step_and_impulse_exact_against_scipy(tanker_modes, tanker_plan):
     s = bag_siso(tanker_modes, tanker_plan.bag("bag_1"), ZETA)
-    s = s.with_modes(range(8), D=np.array([[2e-10]]))  # include a feedthrough
+    s = s.with_modes(range(8), feedthrough=np.array([[2e-10]]))  # include a feedthrough
     t = np.linspace(0.0, 1.5, 301)
     lti = sig.StateSpace(s.A, s.B, s.C, s.D)
     _, y_step = sig.step(lti, T=t)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from flexlift.errors import InputError
 from flexlift.loads.clusters import across, cluster_faults, cluster_lengths
-from flexlift.physics.gas import expansion_rate
+from flexlift.physics.gas import ambient_pressure, expansion_rate
 from flexlift.scenario.valves import external_valve
 
 #: GL Noble Denton 0027/ND Table 11-1: consequence factor of lift points and their attachments
@@ -103,7 +103,8 @@ def expansion_rate_at_target(scenario, volume: float) -> tuple[float, float]:
     dV/dt = V rho g v / p, the pressure at the bag's point as the loop takes it."""
     env, c = scenario.environment, scenario.control
     rho_g = env.seawater_density_kg_m3 * env.gravity_m_s2
-    p = env.atmospheric_pressure_Pa + rho_g * max(env.water_depth_m - c.target_height_m, 0.0)
+    p = float(ambient_pressure(c.target_height_m, env.water_depth_m, env.atmospheric_pressure_Pa,
+                               rho_g))
     return float(expansion_rate(volume, p, rho_g, c.ascent_speed_m_s)), float(p)
 
 

@@ -34,6 +34,7 @@ from flexlift.control.sequence import start_times
 from flexlift.errors import InputError
 from flexlift.loads.statics import suspended_length
 from flexlift.physics import seabed
+from flexlift.physics.gas import ambient_pressure
 
 log = logging.getLogger(__name__)
 
@@ -265,8 +266,8 @@ def fill_rate_on_seabed(scenario, n_filling: int) -> float:
     if fad is None:
         return q
     env = scenario.environment
-    p = env.atmospheric_pressure_Pa + env.seawater_density_kg_m3 * env.gravity_m_s2 * (
-        env.water_depth_m)
+    p = float(ambient_pressure(0.0, env.water_depth_m, env.atmospheric_pressure_Pa,
+                               env.seawater_density_kg_m3 * env.gravity_m_s2))
     return min(q, fad / 60.0 * env.atmospheric_pressure_Pa / p / max(n_filling, 1))
 
 

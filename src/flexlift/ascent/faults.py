@@ -11,9 +11,12 @@ controller), for any plant:
 - ``sensor_dropout``: they hold them for ``duration_s``;
 - ``dump_valve_stuck_closed``: the bag's purge opening is held at 0 from then on;
 - ``fill_valve_stuck_open``: the bag fills at the full rate (``gas.fill_rate_max_m3_s``)
-  whatever its command, until its true capacity; the excess then spills or is relieved.
+  whatever its command, until its true capacity; the excess then spills or is relieved;
+- ``fill_valve_stuck_closed``: the bag is filled no more whatever its command (its purge
+  still works). Within the model a shut fill valve and a lost supply line cut the same
+  flow, so both clear the one switch ``supply`` (at their step, not the next sample).
 
-The stuck valves act at the next control sample (:func:`flexlift.ascent.kernel.stuck_valves`).
+The stuck-open fill and stuck-closed dump valves act at the next control sample (:func:`flexlift.ascent.kernel.stuck_valves`).
 """
 
 from __future__ import annotations
@@ -50,7 +53,7 @@ def apply_fault(fault, t: float, names, switches, control_bags, control_state) -
         sw.attached[i] = 0.0
         if controlled.size:
             control_state.active[controlled[0]] = False
-    elif fault.kind == "supply_failure":
+    elif fault.kind in ("supply_failure", "fill_valve_stuck_closed"):
         sw.supply[i] = 0.0
     elif fault.kind == "sensor_drift":
         sw.drift[i], sw.drift_t0[i] = fault.rate_m_s, t

@@ -14,18 +14,19 @@ from flexlift._jit import inline_jit
 
 
 @inline_jit
-def _rows(M, x, out, add):
-    """out = M @ x, or out += M @ x when ``add``; rows four at a time, then one at a time."""
-    m, n = M.shape
+def _rows(matrix, x, out, add):
+    """out = M @ x, or out += M @ x when ``add`` (``matrix`` M); rows four at a time, then one
+    at a time."""
+    m, n = matrix.shape
     i = 0
     while i + 4 <= m:
         s0, s1, s2, s3 = 0.0, 0.0, 0.0, 0.0
         for j in range(n):
             xj = x[j]
-            s0 += M[i, j] * xj
-            s1 += M[i + 1, j] * xj
-            s2 += M[i + 2, j] * xj
-            s3 += M[i + 3, j] * xj
+            s0 += matrix[i, j] * xj
+            s1 += matrix[i + 1, j] * xj
+            s2 += matrix[i + 2, j] * xj
+            s3 += matrix[i + 3, j] * xj
         if add:
             out[i] += s0
             out[i + 1] += s1
@@ -37,7 +38,7 @@ def _rows(M, x, out, add):
     while i < m:
         s = 0.0
         for j in range(n):
-            s += M[i, j] * x[j]
+            s += matrix[i, j] * x[j]
         if add:
             out[i] += s
         else:
@@ -47,15 +48,15 @@ def _rows(M, x, out, add):
 
 
 @inline_jit
-def matvec(M, x, out):
-    """out = M @ x (M (m, n), x (n,), out (m,)); returns out."""
-    return _rows(M, x, out, False)
+def matvec(matrix, x, out):
+    """out = M @ x (``matrix`` M (m, n), x (n,), out (m,)); returns out."""
+    return _rows(matrix, x, out, False)
 
 
 @inline_jit
-def matvec_add(M, x, out):
-    """out += M @ x; returns out."""
-    return _rows(M, x, out, True)
+def matvec_add(matrix, x, out):
+    """out += M @ x (``matrix`` M); returns out."""
+    return _rows(matrix, x, out, True)
 
 
 @inline_jit

@@ -46,13 +46,13 @@ def bag_motion(plant, q, v, z, zd):
 
 
 @inline_jit
-def bag_gas(plant, n, z, p, V):
-    """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p, V (at the surface the
-    part below the waterline: :func:`lifting_volume`)."""
+def bag_gas(plant, n, z, p, volume):
+    """Ambient pressure [Pa] and gas volume [m^3] of every bag, into p and ``volume`` (at the
+    surface the part below the waterline: :func:`lifting_volume`)."""
     bags = plant.bags
     for i in range(n.size):
         p[i] = ambient_pressure(z[i], bags.water_depth, bags.p_atm, bags.rho_g)
-        V[i] = lifting_volume(plant, i, gas_volume(n[i], p[i], bags.RT, bags.capacity[i]), z[i])
+        volume[i] = lifting_volume(plant, i, gas_volume(n[i], p[i], bags.RT, bags.capacity[i]), z[i])
 
 
 @inline_jit
@@ -89,19 +89,20 @@ def tipped_spill(plant, i, n, p, z):
 
 
 @inline_jit
-def bag_forces(plant, V, zd, attached, current, point):
+def bag_forces(plant, volume, zd, attached, current, point):
     """Force of every bag on the structure [N], into ``point``: buoyancy minus the bag's drag
     on its speed relative to the ``current`` [m/s], nothing once its sling is broken."""
     bags = plant.bags
-    for i in range(V.size):
-        point[i] = (buoyancy(V[i], bags.rho_g) + drag(zd[i] - current, bags.drag[i])) * attached[i]
+    for i in range(volume.size):
+        point[i] = (buoyancy(volume[i], bags.rho_g) + drag(zd[i] - current, bags.drag[i])) * attached[i]
 
 
 @jit
-def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, active):
+def strip_loads(plant, q, v, holding, sep, current, noise, w, wv, line, contact, active):
     """Strip motion (w [m], wv [m/s]), the explicit line loads (drag, noise, released
     suction) and the contact line loads [N/m], and which strips are in contact (``active``:
-    their springs go into the implicit step). Returns the lowest strip height [m]."""
+    their springs go into the implicit step), with each group's ``holding`` force H [N].
+    Returns the lowest strip height [m]."""
     strips = plant.strips
     matvec_t2(strips.shape_t, q, v, w, wv)
     # the plant's arrays taken once: read through the struct inside the loop, each element's
@@ -116,7 +117,7 @@ def strip_loads(plant, q, v, H, sep, current, noise, w, wv, line, contact, activ
         ws, wvs = w[s], wv[s]
         load = drag(wvs - current, coeff[s]) + noise[s]
         if not held:
-            load -= H[g] * hold[s]
+            load -= holding[g] * hold[s]
         line[s] = load
         if held or ws < 0.0:
             k, c = stiffness[s], damping[s]

@@ -102,14 +102,14 @@ def _same_bits(a, b):
 
 
 @inline_jit
-def group_uplift(plant, V, attached, g):
+def group_uplift(plant, volume, attached, g):
     """Net uplift U_g of holding group ``g`` [N]: its bags' buoyancy minus its wet weight
     (a bag standing for ``count`` identical bags counted that many times)."""
     bags = plant.bags
     total = 0.0
-    for i in range(V.size):
+    for i in range(volume.size):
         if bags.group[i] == g:
-            total += bags.rho_g * V[i] * attached[i] * bags.count[i]
+            total += bags.rho_g * volume[i] * attached[i] * bags.count[i]
     return total - plant.seabed.group_weight[g]
 
 

@@ -215,7 +215,6 @@ def build_result(run, error: str | None, summary_only: bool = False) -> Result:
     """The Dataset of a finished (or failed) run (``summary_only``: the same arrays and
     attributes in a :class:`Frame`, no Dataset; its time series are views of the run's record,
     not copies: a summary reads a few of them once, and the record is the run's own)."""
-    from flexlift.ascent.strength import seabed_profile, strength
     from flexlift.physics.gas import buoyancy
 
     P, rec, R = run.plant, run.recorder, run.state
@@ -248,33 +247,7 @@ def build_result(run, error: str | None, summary_only: bool = False) -> Result:
     Mmax = Vmax = None
     snaps = snapshots(run, own)
     if snaps["t"].size and P.kind == "coupled":
-        xg, Vs, Ms = strength(P, snaps)
-        coords["x"] = ("x", xg, {"units": "m", "long_name": "position from the aft end"})
-        coords["time_strength"] = ("time_strength", snaps["t"],
-                                   {"units": "s", "long_name": "time of the strength samples"})
-        data["shear_force"] = (("time_strength", "x"), Vs, {"units": "N", "long_name": "shear force, upward forces aft of x"})
-        data["bending_moment"] = (("time_strength", "x"), Ms, {"units": "N m", "long_name": "bending moment, sagging positive"})
-        for name, arr, how in (("moment_max", Ms.max(0), "largest bending moment"),
-                               ("moment_min", Ms.min(0), "smallest bending moment"),
-                               ("shear_max", Vs.max(0), "largest shear force"),
-                               ("shear_min", Vs.min(0), "smallest shear force")):
-            data[name] = (("x",), arr, {"units": "N m" if "moment" in name else "N",
-                                        "long_name": f"envelope: {how}"})
-        Mmax, Vmax = float(np.abs(Ms).max()), float(np.abs(Vs).max())
-        Z = section_modulus(run.scenario, xg)
-        allow = run.scenario.hull.allowable_stress_MPa * 1e6
-        stress = np.abs(Ms).max(0) / Z
-        data["stress_max"] = (("x",), stress, {"units": "Pa", "long_name": "envelope: largest hull girder bending stress |M| / Z"})
-        data["utilisation_max"] = (("x",), stress / allow, {"units": "1", "long_name": "envelope: stress over the allowable stress"})
-        bed = seabed_profile(P, snaps)
-        for name, long in (("grounded_from", "aft-most point on the seabed (a touchdown point)"),
-                           ("grounded_to", "forward-most point on the seabed (a touchdown point)"),
-                           ("grounded_length", "length of the structure on the seabed")):
-            data[name] = (("time_strength",), bed[name], {"units": "m", "long_name": long})
-        data["slope_max"] = (("x",), np.abs(bed["slope"]).max(0), {
-            "units": "rad", "long_name": "envelope: largest slope of the structure (retained modes)"})
-        data["slope_largest"] = (("time_strength",), np.abs(bed["slope"]).max(1), {
-            "units": "rad", "long_name": "largest slope along the structure"})
+        Mmax, Vmax = _strength_vars(run, snaps, coords, data)
     events = event_list(run)
     # what the amplification reads (the sling forces over time, the bags' names) as plain
     # arrays: the values a Dataset of them would hold, without building one
@@ -292,6 +265,42 @@ def build_result(run, error: str | None, summary_only: bool = False) -> Result:
         ds = xr.Dataset(data, coords=coords)
     _attributes(ds, run, events, t, Mmax, Vmax, error)
     return Result(ds)
+
+
+def _strength_vars(run, snaps, coords, data) -> tuple[float, float]:
+    """The strength samples ``snaps`` of a coupled run into ``coords`` and ``data``: the shear
+    and moment distributions and their envelopes, the stress and utilisation envelopes, the
+    grounded part and the slopes. Returns the largest |M| [N m] and |V| [N]."""
+    from flexlift.ascent.strength import seabed_profile, strength
+
+    P = run.plant
+    xg, Vs, Ms = strength(P, snaps)
+    coords["x"] = ("x", xg, {"units": "m", "long_name": "position from the aft end"})
+    coords["time_strength"] = ("time_strength", snaps["t"],
+                               {"units": "s", "long_name": "time of the strength samples"})
+    data["shear_force"] = (("time_strength", "x"), Vs, {"units": "N", "long_name": "shear force, upward forces aft of x"})
+    data["bending_moment"] = (("time_strength", "x"), Ms, {"units": "N m", "long_name": "bending moment, sagging positive"})
+    for name, arr, how in (("moment_max", Ms.max(0), "largest bending moment"),
+                           ("moment_min", Ms.min(0), "smallest bending moment"),
+                           ("shear_max", Vs.max(0), "largest shear force"),
+                           ("shear_min", Vs.min(0), "smallest shear force")):
+        data[name] = (("x",), arr, {"units": "N m" if "moment" in name else "N",
+                                    "long_name": f"envelope: {how}"})
+    Z = section_modulus(run.scenario, xg)
+    allow = run.scenario.hull.allowable_stress_MPa * 1e6
+    stress = np.abs(Ms).max(0) / Z
+    data["stress_max"] = (("x",), stress, {"units": "Pa", "long_name": "envelope: largest hull girder bending stress |M| / Z"})
+    data["utilisation_max"] = (("x",), stress / allow, {"units": "1", "long_name": "envelope: stress over the allowable stress"})
+    bed = seabed_profile(P, snaps)
+    for name, long in (("grounded_from", "aft-most point on the seabed (a touchdown point)"),
+                       ("grounded_to", "forward-most point on the seabed (a touchdown point)"),
+                       ("grounded_length", "length of the structure on the seabed")):
+        data[name] = (("time_strength",), bed[name], {"units": "m", "long_name": long})
+    data["slope_max"] = (("x",), np.abs(bed["slope"]).max(0), {
+        "units": "rad", "long_name": "envelope: largest slope of the structure (retained modes)"})
+    data["slope_largest"] = (("time_strength",), np.abs(bed["slope"]).max(1), {
+        "units": "rad", "long_name": "largest slope along the structure"})
+    return float(np.abs(Ms).max()), float(np.abs(Vs).max())
 
 
 class _Arrays:

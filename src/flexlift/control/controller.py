@@ -246,11 +246,11 @@ def supervise(controllers, control_state):
 
 
 @inline_jit
-def act(V, controllers, control_state):
+def act(volume, controllers, control_state):
     """Desired volumes, fill and purge commands from ``control_state.u`` and the measured
-    volumes ``V`` (nc,) [m^3], into ``control_state``: ``V_d``, ``fill`` [m^3/s] and
+    volumes ``volume`` (nc,) [m^3], into ``control_state``: ``V_d``, ``fill`` [m^3/s] and
     ``opening`` [-]."""
-    nc = V.size
+    nc = volume.size
     for i in range(nc):
         if math.isnan(control_state.t_sep[i]) or controllers.mode == OPEN_LOOP:
             # held: the pull from its start
@@ -264,7 +264,7 @@ def act(V, controllers, control_state):
     a = controllers.period / (DERIV_TAU + controllers.period)
     gain = 1.0 / math.sqrt(1.0 + controllers.lam * controllers.lam) / controllers.d_scale
     for i in range(nc):
-        eps = control_state.V_d[i] - V[i]
+        eps = control_state.V_d[i] - volume[i]
         prev = control_state.prev_eps[i] if control_state.flags[0] else eps
         control_state.eps_rate[i] += a * ((eps - prev) / controllers.period
                                           - control_state.eps_rate[i])
@@ -346,11 +346,11 @@ def _levelled(i, controllers, control_state):
 
 
 @jit
-def sample(t, z, zd, V, separated, controllers, control_state):
+def sample(t, z, zd, volume, separated, controllers, control_state):
     """One whole control sample (observe, supervise from the table, act) on the named tuples
     ``controllers`` (:class:`ControlArrays`) and ``control_state`` (:class:`ControlState`), as
     the compiled loop does it; for Python callers and tests."""
     constants, memory = as_struct(controllers), as_struct(control_state)
     observe(t, z, zd, separated, constants, memory)
     supervise(constants, memory)
-    act(V, constants, memory)
+    act(volume, constants, memory)

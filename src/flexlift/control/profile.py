@@ -39,12 +39,12 @@ class Profile:
     limit_from: float | None
 
 
-def speed_limit(z, V, capacity, purge_max, eta, water_depth, p_atm, rho_g):
-    """v_max(z) [m/s] of a bag with gas volume ``V`` [m^3] (of ``capacity``) at heights ``z``
-    [m]: the speed at which its expansion takes ``eta`` of the purge capacity."""
+def speed_limit(z, volume, capacity, purge_max, eta, water_depth, p_atm, rho_g):
+    """v_max(z) [m/s] of a bag with gas volume ``volume`` [m^3] (of ``capacity``) at heights
+    ``z`` [m]: the speed at which its expansion takes ``eta`` of the purge capacity."""
     p = ambient_pressure(np.asarray(z, dtype=float), water_depth, p_atm, rho_g)
-    q = eta * purge_flow(1.0, V, capacity, purge_max)
-    return q / expansion_rate(V, p, rho_g, 1.0)
+    q = eta * purge_flow(1.0, volume, capacity, purge_max)
+    return q / expansion_rate(volume, p, rho_g, 1.0)
 
 
 @jit
@@ -72,13 +72,14 @@ def _pass(v, step, first, stop, by):
         prev = v[i]
 
 
-def valve_profile(target, speed, accel, V, capacity, purge_max, eta, water_depth, p_atm,
+def valve_profile(target, speed, accel, volume, capacity, purge_max, eta, water_depth, p_atm,
                   rho_g) -> Profile | None:
     """The fastest ascent to ``target`` [m] within ``speed`` [m/s], ``accel`` [m/s^2] and
-    the tightest bag's :func:`speed_limit` (``V``, ``capacity``, ``purge_max``: arrays over
-    the bags, ``purge_max`` each bag's dump valve); None when the limit never binds."""
+    the tightest bag's :func:`speed_limit` (``volume`` [m^3], ``capacity``, ``purge_max``:
+    arrays over the bags, ``purge_max`` each bag's dump valve); None when the limit never
+    binds."""
     z = np.linspace(0.0, target, HEIGHTS)
-    V = np.atleast_1d(V)
+    V = np.atleast_1d(volume)
     q = np.broadcast_to(np.asarray(purge_max, dtype=float), V.shape)
     lim = np.min([speed_limit(z, v, c, qi, eta, water_depth, p_atm, rho_g)
                   for v, c, qi in zip(V, np.atleast_1d(capacity), q)], axis=0)

@@ -69,9 +69,10 @@ class ModalStateSpace:
     mode_numbers: np.ndarray
 
     @classmethod
-    def from_modal(cls, omega, zeta, b, c_disp, c_vel, D=None, inputs=None, outputs=None,
-                   mode_numbers=None) -> ModalStateSpace:
-        """Build A, B, C from the modal data (see the class docstring for shapes and units)."""
+    def from_modal(cls, omega, zeta, b, c_disp, c_vel, feedthrough=None, inputs=None,
+                   outputs=None, mode_numbers=None) -> ModalStateSpace:
+        """Build A, B, C from the modal data (see the class docstring for shapes and units);
+        ``feedthrough``: D (zeros when None)."""
         omega = np.asarray(omega, float)
         zeta = np.asarray(zeta, float)
         b = np.atleast_2d(np.asarray(b, float))
@@ -89,7 +90,8 @@ class ModalStateSpace:
         C = np.zeros((n_out, 2 * m))
         C[:, 0::2] = c_disp
         C[:, 1::2] = c_vel
-        D = np.zeros((n_out, n_in)) if D is None else np.array(D, float).reshape(n_out, n_in)
+        D = (np.zeros((n_out, n_in)) if feedthrough is None
+             else np.array(feedthrough, float).reshape(n_out, n_in))
         inputs = tuple(inputs) if inputs is not None else tuple(f"u{k}" for k in range(n_in))
         outputs = tuple(outputs) if outputs is not None else tuple(f"y{k}" for k in range(n_out))
         numbers = np.arange(1, m + 1) if mode_numbers is None else np.asarray(mode_numbers, int)
@@ -135,13 +137,15 @@ class ModalStateSpace:
             self.mode_numbers,
         )
 
-    def with_modes(self, keep: Sequence[int], D: np.ndarray | None = None) -> ModalStateSpace:
-        """The model restricted to the modes at 0-based positions ``keep`` (feedthrough D
-        replaced when given)."""
+    def with_modes(self, keep: Sequence[int],
+                   feedthrough: np.ndarray | None = None) -> ModalStateSpace:
+        """The model restricted to the modes at 0-based positions ``keep`` (its feedthrough D
+        replaced by ``feedthrough`` when given)."""
         keep = np.sort(np.asarray(keep, int))
         return ModalStateSpace.from_modal(
             self.omega[keep], self.zeta[keep], self.b[keep], self.c_disp[:, keep],
-            self.c_vel[:, keep], self.D if D is None else D, self.inputs, self.outputs,
+            self.c_vel[:, keep], self.D if feedthrough is None else feedthrough, self.inputs,
+            self.outputs,
             self.mode_numbers[keep],
         )
 

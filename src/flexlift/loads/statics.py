@@ -114,11 +114,11 @@ def bag_vector(hull: Hull, plan, lifts: dict) -> np.ndarray:
 
 
 def solve(hull: Hull, plan, lifts: dict, stiffness: float, q_el: np.ndarray,
-          point_weights: np.ndarray, Z: np.ndarray, allowable: float,
+          point_weights: np.ndarray, modulus: np.ndarray, allowable: float,
           slope_validity_deg: float, water_mass: float = 0.0) -> Statics:
     """The static state of ``hull`` under bag ``lifts`` [N by name] on a seabed of spring
     ``stiffness`` [N/m per m]; ``q_el`` wet weight per element [N/m], ``point_weights`` [N]
-    per node, ``Z`` section modulus per element [m^3], ``allowable`` stress [Pa]; slopes
+    per node, ``modulus`` Z: section modulus per element [m^3], ``allowable`` stress [Pa]; slopes
     beyond ``slope_validity_deg`` (the small-deflection beam's validity) are warned about;
     ``water_mass`` [kg/m] the water accelerating with a floating structure."""
     n_nodes = hull.n_nodes
@@ -136,6 +136,7 @@ def solve(hull: Hull, plan, lifts: dict, stiffness: float, q_el: np.ndarray,
     w, th = u[0::2], u[1::2]
     reaction = np.where(active, -k_node * w, 0.0)
     M = _moment(hull, q_el, point_weights, plan, lifts, reaction, accel, water_mass)
+    Z = modulus
     Zn = np.minimum(np.r_[Z[0], Z], np.r_[Z, Z[-1]])  # the weaker element at each node
     util = np.abs(M) / Zn / allowable
     return Statics(x=hull.x_nodes, w=w, slope=th, contact=active, reaction=reaction, moment=M,

@@ -73,17 +73,7 @@ def stack(datasets: list[xr.Dataset], by_point: dict | None = None) -> xr.Datase
                               for b in d.bag.values))
     pos = {d.attrs["control"]: np.array([bags.index(str(b)) for b in d.bag.values], dtype=int)
            if "bag" in d.coords else np.zeros(0, dtype=int) for d in datasets}
-    names: dict[str, None] = {}
-    for d in datasets:
-        names.update(dict.fromkeys(list(d.data_vars) + [c for c in _TIMES if c in d.coords]))
-    template = {}
-    for name in names:
-        template[name] = next(d[name] for d in datasets if name in d.variables)
-        if template[name].dims[-1:] == ("point",):  # as the bags' histories it stands for
-            tv = template[name]
-            template[name] = xr.Variable(tv.dims[:-1] + ("bag",), np.zeros(
-                tv.shape[:-1] + (0,), tv.dtype), {k: v for k, v in tv.attrs.items()
-                                                   if k != _STORED})
+    template = _template(datasets)
     data = {}
     first_of_point, bag_point = _points(datasets, bags)
     for name, tv in template.items():
@@ -126,19 +116,41 @@ def stack(datasets: list[xr.Dataset], by_point: dict | None = None) -> xr.Datase
     for d in datasets:
         if "x" in d.coords and "x" not in coords:
             coords["x"] = ("x", d["x"].values, dict(d["x"].attrs))
+    return xr.Dataset(data, coords=coords, attrs=_file_attrs(datasets, modes))
+
+
+def _template(datasets: list[xr.Dataset]) -> dict:
+    """Each variable (and time coordinate) of any mode, from the first mode that has it; one
+    stored by lift point as the bags' histories it stands for (an empty ``bag`` column)."""
+    names: dict[str, None] = {}
+    for d in datasets:
+        names.update(dict.fromkeys(list(d.data_vars) + [c for c in _TIMES if c in d.coords]))
+    template = {}
+    for name in names:
+        template[name] = next(d[name] for d in datasets if name in d.variables)
+        if template[name].dims[-1:] == ("point",):  # as the bags' histories it stands for
+            tv = template[name]
+            template[name] = xr.Variable(tv.dims[:-1] + ("bag",), np.zeros(
+                tv.shape[:-1] + (0,), tv.dtype), {k: v for k, v in tv.attrs.items()
+                                                   if k != _STORED})
+    return template
+
+
+def _file_attrs(datasets: list[xr.Dataset], modes: list[str]) -> dict:
+    """The stacked file's attributes: its title, scenario and checksum, and each mode's own
+    attributes, variables, coordinates and bags (``mode_attrs``, JSON) for :func:`unstack`."""
     meta = {d.attrs["control"]: {"attrs": dict(d.attrs),
                                  "variables": list(d.data_vars),
                                  "coords": list(d.coords),
                                  "bags": [str(b) for b in d.bag.values] if "bag" in d.coords
                                  else []} for d in datasets}
     first = datasets[0].attrs
-    attrs = {"title": f"flexlift ascent of {first.get('scenario', '')}, control modes: "
-                      f"{', '.join(modes)}",
-             "scenario": first.get("scenario", ""),
-             "scenario_checksum": first.get("scenario_checksum", ""),
-             "modes": " ".join(modes),
-             "mode_attrs": json.dumps(meta)}
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return {"title": f"flexlift ascent of {first.get('scenario', '')}, control modes: "
+                     f"{', '.join(modes)}",
+            "scenario": first.get("scenario", ""),
+            "scenario_checksum": first.get("scenario_checksum", ""),
+            "modes": " ".join(modes),
+            "mode_attrs": json.dumps(meta)}
 
 
 #: the attribute of a bag history stored once per lift point

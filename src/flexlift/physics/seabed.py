@@ -35,10 +35,10 @@ def holding_rate(uplift, H0, breakout_time):
 
 
 @inline_jit
-def released_holding(H, dt, release_time):
-    """Holding force [N] ``dt`` [s] after separation left it at ``H`` [N]: the exact decay
-    H exp(-dt / tau_r) of dH/dt = -H / tau_r (``release_time`` tau_r [s])."""
-    return H * np.exp(-dt / release_time)
+def released_holding(holding, dt, release_time):
+    """Holding force [N] ``dt`` [s] after separation left it at ``holding`` H [N]: the exact
+    decay H exp(-dt / tau_r) of dH/dt = -H / tau_r (``release_time`` tau_r [s])."""
+    return holding * np.exp(-dt / release_time)
 
 
 @inline_jit

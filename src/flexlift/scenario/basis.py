@@ -11,10 +11,10 @@ value, as a run's own scenario.yaml does).
 
 from __future__ import annotations
 
-from functools import lru_cache
-
+from flexlift.physics.gas import ambient_pressure
 from flexlift.scenario import catalogue, valves
-from flexlift.scenario.defaults import POLICY, own_structure, set_in
+from flexlift.scenario.defaults import POLICY, set_in
+from flexlift.scenario.provenance import generic_defaults, source, value_of
 
 __all__ = ["design_basis", "in_air_daf", "DAF_TABLE", "CONSEQUENCE_LIFT_POINT"]
 
@@ -33,46 +33,11 @@ def in_air_daf(weight_t: float) -> float | None:
     return next(f for top, f in DAF_TABLE if weight_t <= top)
 
 
-@lru_cache(maxsize=1)
-def _tanker():
-    from flexlift.scenario.schema import load_scenario
-
-    return load_scenario("tanker")
-
-
-@lru_cache(maxsize=1)
-def _defaults():
-    """Every key at its generic default (a scenario built without validation; read only)."""
-    from flexlift.scenario.schema import Scenario
-
-    return Scenario.model_construct()
-
-
-def _value(model, dotted: str):
-    node = model
-    for part in dotted.split("."):
-        node = getattr(node, part)
-    return node
-
-
-def source(scenario, dotted: str) -> str:
-    """Where the value of key ``dotted`` comes from (module docstring)."""
-    how = (scenario.defaulted or {}).get(dotted)
-    if how:
-        return how
-    if scenario.name == "tanker" or not own_structure(scenario):
-        same = _value(scenario, dotted) == _value(_tanker(), dotted)
-        return "paper" if same else "user"
-    if set_in(scenario, dotted) and _value(scenario, dotted) != _value(_defaults(), dotted):
-        return "user"
-    return "default"
-
-
 def _free_air_at_wreck(scenario) -> float:
     """A bag's fill rate at the wreck's depth as free air at the surface [m3/s] (Boyle)."""
     env = scenario.environment
-    p = env.atmospheric_pressure_Pa + (env.seawater_density_kg_m3 * env.gravity_m_s2
-                                       * env.water_depth_m)
+    p = float(ambient_pressure(0.0, env.water_depth_m, env.atmospheric_pressure_Pa,
+                               env.seawater_density_kg_m3 * env.gravity_m_s2))
     return scenario.gas.fill_rate_max_m3_s * p / env.atmospheric_pressure_Pa
 
 
@@ -107,7 +72,7 @@ def _catalogue_rows(scenario) -> list[dict]:
                 + POLICY["lift.catalogue_bag"][1] + (f"; {note}" if note else ""))
     body = ("type", "diameter_m", "length_m", "working_pressure_bar")
     if (bag.model is None and set_in(scenario, "lift.catalogue_bag.lift_t")
-            and bag.lift_t != _defaults().lift.catalogue_bag.lift_t
+            and bag.lift_t != generic_defaults().lift.catalogue_bag.lift_t
             and not any(set_in(scenario, f"lift.catalogue_bag.{f}") for f in body)):
         # a lift alone: the rest of the bag is still the paper's 565 t cylinder's
         only = (f"only its lift given: its type and body are the paper's "
@@ -197,7 +162,7 @@ def design_basis(scenario, weight_t: float | None = None) -> list[dict]:
     for key, how in (scenario.defaulted or {}).items():
         if key not in shown:
             try:
-                value = _value(scenario, key)
+                value = value_of(scenario, key)
             except AttributeError:
                 value = None
             shown_value = "auto (the rule beside it)" if value is None else _show(value)

@@ -488,9 +488,13 @@ class FillValveStuckOpen(_Fault):
     kind: Literal["fill_valve_stuck_open"]
 
 
+class FillValveStuckClosed(_Fault):
+    kind: Literal["fill_valve_stuck_closed"]
+
+
 Fault = Annotated[
     BagRupture | SlingBreak | SupplyFailure | SensorDrift | SensorStuck | SensorDropout
-    | DumpValveStuckClosed | FillValveStuckOpen,
+    | DumpValveStuckClosed | FillValveStuckOpen | FillValveStuckClosed,
     Field(discriminator="kind"),
 ]
 

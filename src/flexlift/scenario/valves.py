@@ -6,7 +6,7 @@ An external bag's purge valve passes at most, by precedence: the user's
 ``gas.purge_rate_max_m3_s`` (2 m3/s: "assumed", or "paper" for the tanker's own value).
 Internal bags (in the tanks) always take ``gas.purge_rate_max_m3_s``.
 
-"Given" is read as the design basis reads it (:func:`flexlift.scenario.basis.source`), so that a
+"Given" is read as the design basis reads it (:func:`flexlift.scenario.provenance.source`), so that a
 run's own scenario.yaml, which writes every key, repeats the run: a structure of the user's own
 gave the key when it is not among the scenario's ``defaulted`` keys; the tanker, or a scenario
 based on it, when its value differs from the tanker's 2 m3/s.
@@ -15,6 +15,8 @@ based on it, when its value differs from the tanker's 2 m3/s.
 from __future__ import annotations
 
 from typing import NamedTuple
+
+from flexlift.scenario.provenance import source
 
 __all__ = ["KEY", "VALVE_KEY", "Valve", "external_valve", "purge_given", "purge_source"]
 
@@ -36,8 +38,6 @@ def purge_source(scenario) -> str:
     """Where ``gas.purge_rate_max_m3_s`` comes from: "user" (given, module docstring),
     "assumed" (a structure of the user's own that does not give it) or "paper" (the tanker's
     value)."""
-    from flexlift.scenario.basis import source
-
     src = source(scenario, KEY)
     return "user" if src == "default" else src  # default: given, equal to the schema's
 

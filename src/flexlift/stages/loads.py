@@ -155,9 +155,9 @@ _ROWS = (
     ("heave acceleration (inertia relief)", "m/s2", lambda c: c["heave_acceleration_m_s2"]),
     ("pitch acceleration (inertia relief)", "rad/s2", lambda c: c["pitch_acceleration_rad_s2"]),
     ("load (down) / lift (up)", "t", lambda c: f"{c['load_t']:.1f} / {c['lift_t']:.1f}"),
-    ("max |V|", "MN", lambda c: c["max_shear_MN"]["value"]),
+    ("V at the largest |V| (signed)", "MN", lambda c: c["max_shear_MN"]["value"]),
     ("  at x", "m", lambda c: c["max_shear_MN"]["x_m"]),
-    ("max |M|", "MN m", lambda c: c["max_moment_MNm"]["value"]),
+    ("M at the largest |M| (signed)", "MN m", lambda c: c["max_moment_MNm"]["value"]),
     ("  at x", "m", lambda c: c["max_moment_MNm"]["x_m"]),
     ("  nearest node", "-", lambda c: c["max_moment_MNm"]["node"]),
     ("max sagging M", "MN m", lambda c: c["max_sagging_MNm"]["value"]),
@@ -243,8 +243,9 @@ def _tables(summary: dict) -> list[Table]:
     paper = summary.get("paper_still_water")
     if paper is not None:
         rows = [[label, paper[key]["value"], unit, paper[key]["x_m"], paper[key]["node"]]
-                for label, key, unit in (("max |V|", "max_shear_MN", "MN"),
-                                         ("max |M|", "max_moment_MNm", "MN m"),
+                for label, key, unit in (("V at the largest |V| (signed)", "max_shear_MN", "MN"),
+                                         ("M at the largest |M| (signed)", "max_moment_MNm",
+                                          "MN m"),
                                          ("max sagging M", "max_sagging_MNm", "MN m"),
                                          ("max hogging M", "max_hogging_MNm", "MN m"))]
         rows.append(["closing V at the bow", paper["closing_shear_MN"], "MN", None, None])

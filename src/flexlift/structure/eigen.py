@@ -247,27 +247,29 @@ def _leading_max(E: np.ndarray) -> np.ndarray:
     return np.maximum.accumulate(np.tril(np.maximum(a, a.T)).max(axis=1))
 
 
-def orthonormalised(M, lam, Y, Z=None, K=None):
+def orthonormalised(mass, lam, shapes, coords=None, stiffness=None):
     """M-orthonormalise the columns of Y (a Cholesky factor of their Gram matrix, lowest mode
     first) and check them: returns lam, Y and err, where err[k] is the largest
     |Y^T K Y - diag(lam)|_ij / max(lam_i, lam_j) over modes i, j <= k [-].
 
-    M : (scaled) mass matrix; lam : (k,) eigenvalues [rad^2/s^2], ascending; Y : (N, k)
-    shapes; Z : (2 n_el, k) their stiffness coordinates (Y^T K Y = Z^T Z), or None to use
-    the assembled (scaled) stiffness K. Columns from the first one that is linearly
-    dependent on those before it (no Cholesky factor) are dropped.
+    mass : the (scaled) mass matrix M; lam : (k,) eigenvalues [rad^2/s^2], ascending;
+    shapes : (N, k) the shapes Y; coords : (2 n_el, k) their stiffness coordinates Z
+    (Y^T K Y = Z^T Z), or None to use ``stiffness``, the assembled (scaled) stiffness K.
+    Columns from the first one that is linearly dependent on those before it (no Cholesky
+    factor) are dropped.
     """
-    G = _gram(Y, np.asarray(M @ Y))
-    GK = _gram(Z) if Z is not None else _gram(Y, np.asarray(K @ Y))
+    G = _gram(shapes, np.asarray(mass @ shapes))
+    GK = (_gram(coords) if coords is not None
+          else _gram(shapes, np.asarray(stiffness @ shapes)))
     d = 1.0 / np.sqrt(np.diag(G))  # unit columns first: G = I + (loss of orthogonality)
     G = G * np.outer(d, d)
     U, info = sla.lapack.dpotrf(G, lower=0, clean=1)
     k = lam.size if info == 0 else info - 1
     if k == 0:
-        return lam[:0], Y[:, :0], np.zeros(0)
+        return lam[:0], shapes[:, :0], np.zeros(0)
     if info:  # factor the leading block that is positive definite
         U, _ = sla.lapack.dpotrf(G[:k, :k], lower=0, clean=1)
-    lam, Yd, GK = lam[:k], Y[:, :k] * d[:k], GK[:k, :k] * np.outer(d[:k], d[:k])
+    lam, Yd, GK = lam[:k], shapes[:, :k] * d[:k], GK[:k, :k] * np.outer(d[:k], d[:k])
     if k <= _FEW_COLUMNS:
         T = sla.lapack.dtrtri(U)[0]  # U^-1 (a few columns: explicit, no BLAS on tall Y)
         Y = np.einsum("nk,kj->nj", Yd, T)
@@ -281,12 +283,12 @@ def orthonormalised(M, lam, Y, Z=None, K=None):
 
 
 def flexibility_flexible(
-    beam: Beam, R: np.ndarray, n_flex: int, tol: float = 0.0
+    beam: Beam, rigid: np.ndarray, n_flex: int, tol: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lowest ``n_flex`` flexible eigenvalues [rad^2/s^2] and M-orthonormal modes (N, n_flex),
     ascending, by the flexibility operator alone (module docstring), with the error of each
     (:func:`orthonormalised`)."""
-    op = _Flexibility(beam, R)
+    op = _Flexibility(beam, rigid)
     lam, Y, err = orthonormalised(op.M, *_flexibility_solve(op, n_flex, tol))
     return lam, op.s[:, None] * Y, err
 
@@ -297,12 +299,12 @@ def _split(beam: Beam, lam: np.ndarray) -> int:
 
 
 def flexibility_and_stiffness(
-    beam: Beam, R: np.ndarray, n_flex: int
+    beam: Beam, rigid: np.ndarray, n_flex: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """As :func:`flexibility_flexible`, except that on a model of at most DENSE_MAX_DOF the
     requested modes above sqrt(lambda_1 lambda_max) come from a dense solve of the stiffness
     form, which resolves them where the flexibility form cannot (module docstring)."""
-    op = _Flexibility(beam, R)
+    op = _Flexibility(beam, rigid)
     small = beam.n_dof <= DENSE_MAX_DOF
     if small and _DENSE_BELOW < op.size <= 2 * n_flex + 2:
         # nearly all modes: the stiffness form first (it places the split), then the
@@ -326,11 +328,11 @@ def flexibility_and_stiffness(
 
 
 def shift_invert_flexible(
-    beam: Beam, R: np.ndarray, n_flex: int, tol: float = 0.0, sigma: float | None = None
+    beam: Beam, rigid: np.ndarray, n_flex: int, tol: float = 0.0, sigma: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lowest flexible modes by scaled, deflated shift-invert Lanczos with a sparse LU of
     K + sigma M (sigma > 0 [rad^2/s^2], default the uniform-beam estimate of
-    the first flexible eigenvalue). Works for any K whose null space is R. Returns as
+    the first flexible eigenvalue). Works for any K whose null space is R (``rigid``). Returns as
     :func:`flexibility_flexible`, checked against the assembled K."""
     hull = beam.hull
     s = sp.diags(dof_scale(hull))
@@ -338,7 +340,7 @@ def shift_invert_flexible(
     m_ref = hull.total_mass / hull.length * hull.element_length
     Ks = (s @ beam.K @ s).tocsc() / k_ref
     Ms = (s @ beam.M @ s).tocsc() / m_ref
-    Rs = R / dof_scale(hull)[:, None] * np.sqrt(m_ref)  # Ms-orthonormal
+    Rs = rigid / dof_scale(hull)[:, None] * np.sqrt(m_ref)  # Ms-orthonormal
     MR = np.asarray(Ms @ Rs)
     lam_scale = k_ref / m_ref
     if sigma is None:
@@ -371,12 +373,12 @@ def shift_invert_flexible(
     order = np.argsort(nu)
     Y = Y[:, order]
     Y = Y - Rs @ (MR.T @ Y)
-    nu, Y, err = orthonormalised(Ms, nu[order], Y, K=Ks)
+    nu, Y, err = orthonormalised(Ms, nu[order], Y, stiffness=Ks)
     return nu * lam_scale, dof_scale(hull)[:, None] * Y / np.sqrt(m_ref), err
 
 
 def sparse_flexible(
-    beam: Beam, R: np.ndarray, n_flex: int, method: str = "auto"
+    beam: Beam, rigid: np.ndarray, n_flex: int, method: str = "auto"
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lowest ``n_flex`` flexible eigenvalues lambda = omega^2 [rad^2/s^2] (ascending), their
     M-orthonormal mode shapes V (N, n_flex) in the M-orthogonal complement of the rigid modes
@@ -393,7 +395,7 @@ def sparse_flexible(
     log.debug("sparse modal solve: %s, %d elements, %d flexible modes", method,
               beam.hull.n_elements, n_flex)
     if method == "flexibility":
-        return flexibility_and_stiffness(beam, R, n_flex)
+        return flexibility_and_stiffness(beam, rigid, n_flex)
     if method == "shift-invert":
-        return shift_invert_flexible(beam, R, n_flex)
+        return shift_invert_flexible(beam, rigid, n_flex)
     raise ValueError(f"method {method!r}: use 'flexibility', 'shift-invert' or 'auto'")

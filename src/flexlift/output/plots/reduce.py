@@ -76,8 +76,8 @@ def _short(label: str) -> str:
 _HALF_TURN_TOL = 0.05  # [rad]
 
 
-def bode_phase(G: np.ndarray) -> np.ndarray:
-    """Unwrapped phase [deg] of a frequency response ``G`` sampled on an increasing grid.
+def bode_phase(response: np.ndarray) -> np.ndarray:
+    """Unwrapped phase [deg] of a frequency ``response`` G sampled on an increasing grid.
 
     :func:`numpy.unwrap` removes the 360-degree jumps; what it cannot decide is a jump of
     exactly 180 degrees, where an undamped response (a reduced model's rigid part plus its
@@ -85,6 +85,7 @@ def bode_phase(G: np.ndarray) -> np.ndarray:
     lightly damped pair would take it (minimum phase): up through a zero (|G| at a minimum),
     down through a pole. The curve then starts in (-270, 90].
     """
+    G = response
     ph = np.unwrap(np.angle(G))
     d = np.diff(ph)
     half = np.flatnonzero(np.abs(np.abs(d) - np.pi) < _HALF_TURN_TOL)

@@ -19,16 +19,19 @@ from flexlift.errors import InputError
 
 #: the kinds of a single failure, as the scenario's fault kinds, in the report's order
 KINDS = ("bag_rupture", "sling_break", "dump_valve_stuck_closed", "fill_valve_stuck_open",
-         "supply_failure", "sensor_stuck", "sensor_drift", "sensor_dropout")
+         "fill_valve_stuck_closed", "supply_failure", "sensor_stuck", "sensor_drift",
+         "sensor_dropout")
 #: what each kind is, in the report's words
 KIND_TEXT = {"bag_rupture": "bag lost", "sling_break": "sling broken",
              "dump_valve_stuck_closed": "dump valve stuck closed",
-             "fill_valve_stuck_open": "fill valve stuck open", "supply_failure": "supply lost",
+             "fill_valve_stuck_open": "fill valve stuck open",
+             "fill_valve_stuck_closed": "fill valve stuck closed", "supply_failure": "supply lost",
              "sensor_stuck": "sensor stuck", "sensor_drift": "sensor drifting",
              "sensor_dropout": "sensor dropped out"}
 #: the part each kind needs
 PART = {"bag_rupture": "bag", "sling_break": "sling", "dump_valve_stuck_closed": "dump valve",
-        "fill_valve_stuck_open": "fill valve", "supply_failure": "gas supply",
+        "fill_valve_stuck_open": "fill valve", "fill_valve_stuck_closed": "fill valve",
+        "supply_failure": "gas supply",
         "sensor_stuck": "sensors", "sensor_drift": "sensors", "sensor_dropout": "sensors"}
 #: a lost bag's gas escapes with this time constant [s] (the fault's default)
 LEAK_TIME_S = 5.0
