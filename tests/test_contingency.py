@@ -170,7 +170,7 @@ def test_the_margin_scales_the_survivors_only_and_the_pinned_plan_is_the_plan():
 
 
 def test_a_study_over_the_time_limit_is_refused_in_one_line_naming_yes(tmp_path):
-    """The trawler's whole set (288 cases) on one worker is estimated over 10 min: refused
+    """The trawler's whole set (324 cases: 9 kinds) on one worker is estimated over 10 min: refused
     before any case runs, one line with the way on, exit 2, nothing written for the cases."""
     data = Path(__file__).parent / "data" / "trawler.yaml"
     p = subprocess.run([sys.executable, "-m", "flexlift", "contingency", str(data), "--workers",
@@ -179,7 +179,7 @@ def test_a_study_over_the_time_limit_is_refused_in_one_line_naming_yes(tmp_path)
     assert p.returncode == 2, p.stderr
     line = p.stderr.strip()
     assert len(line.splitlines()) == 1 and "Traceback" not in line
-    assert line.startswith("flexlift contingency: error: 288 cases, about ")
+    assert line.startswith("flexlift contingency: error: 324 cases, about ")
     assert "give --yes to run it, or choose fewer --kinds or --phases" in line
     assert not (tmp_path / "o" / "cases").exists()
 

@@ -136,3 +136,9 @@ def test_a_pipes_fault_names_its_bags_briefly(tmp_path, capsys):
     text += "\nfaults:\n  - {kind: sling_break, bag: bag_1, time_s: 1}\n"
     assert main(["modes", _scenario(tmp_path, text, "p.yaml")]) == 2
     _one_line(capsys, "faults[0].bag: got 'bag_1'", "B01, B02, B03, B04, ..., B39, B40 (40 bags)")
+
+
+def test_an_overlong_contingency_out_is_one_line_before_any_run(tmp_path, capsys):
+    """Refused before the fault-free run and its "N cases" line (which came first before)."""
+    assert main(["contingency", "tanker", "--out", str(tmp_path / ("c" * 5000))]) == 2
+    _one_line(capsys, "flexlift contingency: error: --out", "at most 3000 bytes are allowed")

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from flexlift.cli._common import (
     help_text,
     scenario_from,
 )
+from flexlift.output.folders import check_length
 from flexlift.scenario.types import whole
 from flexlift.sweep.executors import WORKERS_PER_CORE, max_workers
 
@@ -103,6 +105,7 @@ def _main(args: argparse.Namespace) -> int:
     names, times = (parse_phases(args.phases, scenario.simulation.run_length_s)
                     if args.phases is not None else (PHASES, ()))
     out = args.out if args.out is not None else Path("flexlift-out") / f"contingency-{scenario.name}"
+    check_length(Path(os.path.abspath(out)), str(out))  # before the fault-free run and its line
     engine = make_engine(args.workers, args.scheduler, args.dask_local)
     bar = _Bar(args.quiet or args.json, engine.name)
 
