@@ -148,6 +148,17 @@ def advance(loop, k_stop):
 
 
 @jit
+def advance_many(loops, k_stops, codes):
+    """:func:`advance` for several runs in one compiled call: run ``i`` of ``loops`` (a numba
+    typed List of :class:`~flexlift.ascent.records.LoopInputs` of one numba type) to step
+    ``k_stops[i]``; ``codes[i]`` its return code. An ensemble or a batch of candidates pays
+    one entry (its records' types checked once) for all its members, not one each
+    (:mod:`flexlift.ascent.batch`)."""
+    for i in range(len(loops)):
+        codes[i] = _advance(_structs(loops[i]), k_stops[i])
+
+
+@jit
 def _structs(loop):
     """The records of ``loop`` as structs, in the order of :class:`LoopInputs`: each entry
     point holds them (an argument of its inner function) while the step works on views."""

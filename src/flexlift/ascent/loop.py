@@ -131,6 +131,17 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     >>> round(result.headline["max_ascent_velocity_ms"], 2)  # [m/s], the limit is 0.6
     0.21
     """
+    run = prepare(scenario, control, duration, engine, plant, share, step_control)
+    run.stop_beyond = stop_beyond
+    return run.run(progress, summary_only)
+
+
+def prepare(scenario, control: str | None = None, duration: float | None = None,
+            engine="table", plant: Plant | None = None, share: bool = True,
+            step_control: bool = True) -> Ascent:
+    """The run :func:`simulate` makes, checked and ready, not yet run (its parameters are
+    :func:`simulate`'s): for :func:`flexlift.ascent.batch.run_batch`, which runs several
+    together, or a caller that steps a run chunk by chunk (:meth:`Ascent.next_stop`)."""
     mode = control or scenario.control.mode
     if mode not in MODES:
         raise InputError("control", mode, f"use {', '.join(MODES)}")
@@ -144,9 +155,7 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     refuse_unworkable(scenario, plant)
     if duration is None:
         warn_short(scenario, plant)
-    run = Ascent(scenario, plant, mode, T_end, engine, share, step_control)
-    run.stop_beyond = stop_beyond
-    return run.run(progress, summary_only)
+    return Ascent(scenario, plant, mode, T_end, engine, share, step_control)
 
 
 def held_steps(settings: Settings) -> int:
@@ -245,34 +254,58 @@ class Ascent:
         kernel.initial_equilibrium(self.inputs())
 
     def run(self, progress=None, summary_only: bool = False) -> Result:
-        settings, state, recorder = self.settings, self.state, self.recorder
-        fi, error = 0, None
-        whole = self._expected_steps() if progress is not None else settings.n_steps
+        """Run to the end, chunk by chunk (:meth:`start`, :meth:`next_stop`, the compiled
+        loop, :meth:`after_chunk`, :meth:`finish`); :func:`flexlift.ascent.batch.run_batch`
+        takes the same steps for several runs, with one compiled call per chunk for all."""
+        self.start(progress)
+        while (k_stop := self.next_stop()) is not None:
+            if self.after_chunk(self._advance(k_stop)):
+                break
+        return self.finish(summary_only)
+
+    def start(self, progress=None) -> None:
+        """Before the first chunk: where the run stands and how it reports progress."""
+        self._progress, self._fi = progress, 0
+        self._whole = self._expected_steps() if progress is not None else self.settings.n_steps
         between = (progress is not None or self.stop_beyond or self.external is not None
                    or self.force_noise.on or self.meas_noise.on)
-        chunk = CHUNK_STEPS if between else QUIET_CHUNK_STEPS
-        while state.counters[0] <= settings.n_steps:
-            k = int(state.counters[0])
-            while fi < len(self.faults) and fault_step(self.faults[fi], settings.dt) <= k:
-                self._fault(self.faults[fi], k * settings.dt)
-                fi += 1
-            k_stop = min(k + chunk, settings.n_steps + 1)
-            if fi < len(self.faults):
-                k_stop = min(k_stop, max(fault_step(self.faults[fi], settings.dt), k + 1))
-            self._noise(k, k_stop)
-            self._room(k_stop)
-            code = self._advance(k_stop)
-            if progress is not None:  # 100 % only at the end, whenever that comes
-                progress(min(state.counters[0] / max(whole, 1), 0.99))
-            if code == RET_STOP or (self.stop_beyond and self.beyond()):
-                break
+        self._chunk = CHUNK_STEPS if between else QUIET_CHUNK_STEPS
+
+    def next_stop(self) -> int | None:
+        """Apply the faults due, draw the next chunk's noise and room in the record; the step
+        the next chunk runs to (exclusive), or None once the run is past its last step."""
+        settings, state = self.settings, self.state
+        if state.counters[0] > settings.n_steps:
+            return None
+        k = int(state.counters[0])
+        while self._fi < len(self.faults) and fault_step(self.faults[self._fi], settings.dt) <= k:
+            self._fault(self.faults[self._fi], k * settings.dt)
+            self._fi += 1
+        k_stop = min(k + self._chunk, settings.n_steps + 1)
+        if self._fi < len(self.faults):
+            k_stop = min(k_stop, max(fault_step(self.faults[self._fi], settings.dt), k + 1))
+        self._noise(k, k_stop)
+        self._room(k_stop)
+        return k_stop
+
+    def after_chunk(self, code: int) -> bool:
+        """After a chunk that ended with ``code`` (not ``RET_NEED_U``): progress; whether the
+        run ends here (a stop, or past the model's validity with ``stop_beyond``)."""
+        if self._progress is not None:  # 100 % only at the end, whenever that comes
+            self._progress(min(self.state.counters[0] / max(self._whole, 1), 0.99))
+        return code == RET_STOP or (self.stop_beyond and self.beyond())
+
+    def finish(self, summary_only: bool = False) -> Result:
+        """The result, after the last chunk (raises :class:`SimulationError` with the partial
+        result when the numerics failed)."""
+        recorder, error = self.recorder, None
         if recorder.ev_code[:recorder.counts[2]].tolist().count(EV_NUMERICS):
-            error = f"numerics failed at t = {state.counters[0] * settings.dt:.1f} s: the " \
-                    "state is not finite or blew up"
+            error = f"numerics failed at t = {self.state.counters[0] * self.settings.dt:.1f} s: " \
+                    "the state is not finite or blew up"
         elif recorder.counts[0] == 0 or recorder.t[recorder.counts[0] - 1] != self._t_last():
             kernel.final_row(self._t_last(), self.inputs())
-        if progress is not None:
-            progress(1.0)
+        if self._progress is not None:
+            self._progress(1.0)
         self._per_bag()
         result = build_result(self, error, summary_only)
         if error:
@@ -310,9 +343,14 @@ class Ascent:
             code = kernel.advance(self.inputs(), k_stop)
             if code != RET_NEED_U:
                 return code
-            cs = self.control_state
-            u = np.asarray(self.external(np.column_stack([cs.e_in, cs.r_in])), dtype=float)
-            cs.u[:] = np.where(np.isnan(cs.t_sep), 0.0, u.reshape(-1))
+            self.external_supervisor()
+
+    def external_supervisor(self) -> None:
+        """The external supervisor's outputs for the samples the loop asked for
+        (``RET_NEED_U``), set where the loop reads them."""
+        cs = self.control_state
+        u = np.asarray(self.external(np.column_stack([cs.e_in, cs.r_in])), dtype=float)
+        cs.u[:] = np.where(np.isnan(cs.t_sep), 0.0, u.reshape(-1))
 
     def _room(self, k_stop: int) -> None:
         """Grow the record (doubling) so that it holds the rows and snapshots to ``k_stop``."""

@@ -1,0 +1,91 @@
+"""Several runs of the compiled loop advanced together: one compiled call per chunk for all
+of them (docs/theory/loop.md#batch).
+
+An estimator's ensemble or a designer's batch of candidates is many runs of one loop. Run one
+by one, each chunk of each run is a call from Python into the compiled loop, and each call
+checks the types of its records (~45 µs; :data:`flexlift.ascent.loop.QUIET_CHUNK_STEPS`).
+:func:`run_batch` takes the steps of :meth:`flexlift.ascent.loop.Ascent.run` for every run
+of a batch at once: between chunks each run applies its faults, draws its noise and grows its
+record (:meth:`~flexlift.ascent.loop.Ascent.next_stop`), then
+:func:`flexlift.ascent.kernel.advance_many` advances all of them, each to its own stop, in
+one compiled call. Runs whose records have the same numba type (the same plant kind and
+control: any number of bags, elements or modes) share a call; others go in a call of their
+own. The numbers are those of the runs one by one, to the last bit (tests/test_batch.py).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numba.typed import List
+
+from flexlift.ascent import kernel
+from flexlift.ascent.loop import Ascent
+from flexlift.ascent.result import Result
+from flexlift.ascent.state import RET_NEED_U
+from flexlift.errors import SimulationError
+
+__all__ = ["run_batch"]
+
+
+def run_batch(runs: list[Ascent], summary_only: bool = True) -> list[Result | SimulationError]:
+    """Run every :class:`~flexlift.ascent.loop.Ascent` of ``runs`` to its end, advancing
+    them together.
+
+    Parameters
+    ----------
+    runs : list of Ascent
+        The runs, each made as :func:`flexlift.ascent.simulate` makes its own (its scenario,
+        plant, control mode, duration and supervisor), not yet run.
+    summary_only : bool, optional
+        Results as plain frames, not xarray Datasets (default True: what a batch reads).
+
+    Returns
+    -------
+    list
+        Per run, in order, its :class:`~flexlift.ascent.result.Result`, or the
+        :class:`~flexlift.errors.SimulationError` it ended with (its ``partial`` the result
+        up to then).
+    """
+    for run in runs:
+        run.start()
+    active = list(range(len(runs)))
+    while active:
+        stops = {i: runs[i].next_stop() for i in active}
+        active = [i for i in active if stops[i] is not None]
+        codes = _advance_together(runs, {i: stops[i] for i in active})
+        active = [i for i in active if not runs[i].after_chunk(codes[i])]
+    out: list[Result | SimulationError] = []
+    for run in runs:
+        try:
+            out.append(run.finish(summary_only))
+        except SimulationError as error:
+            out.append(error)
+    return out
+
+
+def _advance_together(runs: list[Ascent], stops: dict[int, int]) -> dict[int, int]:
+    """Each run ``i`` of ``stops`` advanced to ``stops[i]``, those of one numba type in one
+    compiled call; a run whose loop asks for its external supervisor (``RET_NEED_U``) is
+    given it and goes on in the next call. Returns each run's code."""
+    done: dict[int, int] = {}
+    pending = list(stops)
+    while pending:
+        groups: dict[object, list[int]] = {}
+        for i in pending:
+            groups.setdefault(numba.typeof(runs[i].inputs()), []).append(i)
+        pending = []
+        for members in groups.values():
+            loops = List()
+            for i in members:
+                loops.append(runs[i].inputs())
+            k_stops = np.array([stops[i] for i in members], dtype=np.int64)
+            codes = np.zeros(len(members), dtype=np.int64)
+            kernel.advance_many(loops, k_stops, codes)
+            for i, code in zip(members, codes.tolist()):
+                if code == RET_NEED_U:
+                    runs[i].external_supervisor()
+                    pending.append(i)
+                else:
+                    done[i] = code
+    return done
