@@ -51,7 +51,9 @@ from flexlift.control.controller import new_state
 from flexlift.errors import InputError, SimulationError
 from flexlift.physics.seabed import released_holding
 
-MODES = ("decentralized", "coordinated", "paper", "open-loop")
+MODES = ("decentralized", "coordinated", "paper", "open-loop", "commanded")
+#: the mode whose valves are commanded from outside between chunks (:meth:`Ascent.command`)
+COMMANDED = "commanded"
 #: the recorded hull row's pitch column
 HULL_PITCH = list(HULL_VARS).index("pitch")
 #: steps per call of the compiled loop (progress, faults and noise between calls)
@@ -155,6 +157,7 @@ def prepare(scenario, control: str | None = None, duration: float | None = None,
     refuse_unworkable(scenario, plant)
     if duration is None:
         warn_short(scenario, plant)
+    share = share and mode != COMMANDED  # commands are per bag: no bag stands for another
     return Ascent(scenario, plant, mode, T_end, engine, share, step_control)
 
 
@@ -375,6 +378,21 @@ class Ascent:
         if self.state.counters[1] & F_HELD:
             self.state.counters[1] &= ~(F_HELD | F_QUIET | F_STILL | F_HAVE_B)
         self.fault_events.append((t, fault.kind, fault.bag, detail))
+
+    def command(self, bag: int, fill: float | None = None, opening: float | None = None) -> None:
+        """Commanded mode: set the valves of controlled bag ``bag`` (index among
+        ``controllers.bags``) between chunks: ``fill`` [m^3/s of free air] and purge
+        ``opening`` [-]; None leaves a valve where it is. Ends a held block of step control
+        (the valves act from the next step, as :meth:`_fault` does)."""
+        if self.mode != COMMANDED:
+            raise ValueError(f"valves are commanded only in {COMMANDED} mode, not {self.mode}")
+        cs = self.control_state
+        if fill is not None:
+            cs.fill[bag] = min(max(float(fill), 0.0), self.controllers.fill_max)
+        if opening is not None:
+            cs.opening[bag] = min(max(float(opening), 0.0), 1.0)
+        if self.state.counters[1] & F_HELD:
+            self.state.counters[1] &= ~(F_HELD | F_QUIET | F_STILL | F_HAVE_B)
 
     def _per_bag(self) -> None:
         """The state, switches and record with one entry per bag of the plant (each bag's

@@ -35,8 +35,12 @@ its own stretch of the seabed's suction) its reference begins from the height it
 seabed stage by stage. Without a sequence every start time is 0 and nothing changes.
 
 Modes: decentralized (each bag on its own measurements; the moment of separation is the one
-shared signal), coordinated, and open-loop (fill to the breakout volume, never purge). The
-paper's configuration is decentralized control on the paper's plant.
+shared signal), coordinated, open-loop (fill to the breakout volume, never purge) and
+commanded (the valves as commanded from outside the loop: ``fill`` [m^3/s] and ``opening``
+[-] of :class:`ControlState` are set between chunks, by :meth:`flexlift.ascent.loop.Ascent.
+command`, and a valve with no new command stays where it is, as a real one does: ``act``
+leaves them alone; the rig of :mod:`flexlift.live.rig` drives the plant so). The paper's
+configuration is decentralized control on the paper's plant.
 """
 
 from __future__ import annotations
@@ -57,9 +61,9 @@ DERIV_TAU = 1.0
 #: a small steady error and does not wind up during the transients of breakout
 ADAPT_BAND = 0.25
 #: control modes inside the compiled loop
-DECENTRALIZED, COORDINATED, OPEN_LOOP = 0, 1, 2
+DECENTRALIZED, COORDINATED, OPEN_LOOP, COMMANDED = 0, 1, 2, 3
 MODE_CODES = {"decentralized": DECENTRALIZED, "coordinated": COORDINATED, "open-loop": OPEN_LOOP,
-              "paper": DECENTRALIZED}
+              "paper": DECENTRALIZED, "commanded": COMMANDED}
 
 
 class ControlArrays(NamedTuple):
@@ -249,8 +253,11 @@ def supervise(controllers, control_state):
 def act(volume, controllers, control_state):
     """Desired volumes, fill and purge commands from ``control_state.u`` and the measured
     volumes ``volume`` (nc,) [m^3], into ``control_state``: ``V_d``, ``fill`` [m^3/s] and
-    ``opening`` [-]."""
+    ``opening`` [-]. Commanded mode: the commands set from outside stay as they are."""
     nc = volume.size
+    if controllers.mode == COMMANDED:
+        control_state.flags[0] = True
+        return
     for i in range(nc):
         if math.isnan(control_state.t_sep[i]) or controllers.mode == OPEN_LOOP:
             # held: the pull from its start
