@@ -60,7 +60,7 @@ def parse_time_epoch():
     ("flexlift/tk/sensor/bag_1/depth", b'{"time": "soon", "value": 3}', "bad_time"),
     ("flexlift/tk/sensor/bag_9/depth", b'{"time": 1, "value": 3}', "unknown_bag"),
     ("flexlift/tk/sensor/bag_1/colour", b'{"time": 1, "value": 3}', "unknown_quantity"),
-    ("flexlift/tk/sensor/hull/depth", b'{"time": 1, "value": 3}', "hull_quantity"),
+    ("flexlift/tk/sensor/hull/purge", b'{"time": 1, "value": 3}', "hull_quantity"),
     ("flexlift/other/sensor/bag_1/depth", b'{"time": 1, "value": 3}', "topic"),
     ("flexlift/tk/sensor/bag_1", b'{"time": 1, "value": 3}', "topic"),
     ("flexlift/tk/sensor/bag_1/depth", b"[" * 100_000, "bad_value"),

@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections import Counter
 from datetime import datetime, timedelta
 from typing import NamedTuple
 
 #: quantity: (unit, where it is measured, lowest and highest plausible value)
 QUANTITIES = {
-    "depth": ("m", "bag", 0.0, 12_000.0),  # of the bag's lift point, its pressure gauge
+    "depth": ("m", "both", 0.0, 12_000.0),  # of the lift point, its pressure gauge
     "pitch": ("rad", "both", -math.pi / 2, math.pi / 2),  # inclinometer
     "sling_force": ("N", "bag", -1e5, 1e9),  # load cell
     "fill_flow": ("m3/s", "bag", 0.0, 100.0),  # free air, the manifold's meter
@@ -213,3 +214,8 @@ def parse_command(topic: str, payload: bytes, lift: str, bags, tally: Tally) -> 
         tally.drop("bad_value", topic)
         return None
     return Command(seq, t, parts[3], parts[4], value)
+
+
+def lift_name(name: str) -> str:
+    """A lift's name as one topic level: letters, digits, ``_ . -`` (others become ``_``)."""
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", name)[:64] or "lift"

@@ -173,7 +173,19 @@ class Live:
         """Run until ``until`` ("arrived" or a lift time [s]), ``stop`` is set, or
         ``wall_limit`` [s of wall time] passes; then commit the log."""
         self.epoch = epoch if epoch is not None else time.time()
-        start, t_next, reason = time.monotonic(), -math.inf, "interrupted"
+        start = time.monotonic()
+        try:
+            reason = self._loop(until, stop, start, wall_limit)
+        except KeyboardInterrupt:  # SIGINT: end here, cleanly
+            reason = "interrupted"
+        self.log.commit()
+        return Outcome(reason, self.board.now(time.monotonic()), self.arrived_s,
+                       self.max_speed, self.max_pitch, self.board.count, self.board.late,
+                       dict(Counter(self.tally.counts)), self.commands,
+                       list(self.alarms.raised), self.stale_periods)
+
+    def _loop(self, until, stop, start: float, wall_limit: float) -> str:
+        t_next, reason = -math.inf, "interrupted"
         while not stop.is_set():
             wall = time.monotonic()
             if wall - start > wall_limit:
@@ -181,7 +193,7 @@ class Live:
                 break
             self.read()
             t = self.board.now(time.monotonic())
-            if t >= t_next:
+            if math.isfinite(t) and t >= t_next:
                 self.period(t, time.monotonic())
                 t_next = max(t_next + self.master.period, t) if math.isfinite(t_next) else t
                 if until == "arrived" and self.arrived():
@@ -192,8 +204,4 @@ class Live:
                     break
             gap = (t_next - t) / self.board.rate if math.isfinite(t) else MAX_SLEEP_S
             stop.wait(min(max(gap, 0.0), MAX_SLEEP_S))
-        self.log.commit()
-        return Outcome(reason, self.board.now(time.monotonic()), self.arrived_s,
-                       self.max_speed, self.max_pitch, self.board.count, self.board.late,
-                       dict(Counter(self.tally.counts)), self.commands,
-                       list(self.alarms.raised), self.stale_periods)
+        return reason

@@ -1,0 +1,125 @@
+"""``flexlift live``: run a lift over MQTT (docs/reference/live.md): read every sensor, run the
+master controller (``--control master``: the coordinated laws fed from the network) or advise
+(``--control advise``: the commands computed, shown and logged, none sent), raise alarms, log
+everything to ``--out``/live.sqlite, and at the end write the report of the lift beside the
+plan's simulation. ``--until arrived`` (default) or a time [s since filling began] ends it;
+SIGINT ends it cleanly. Without ``--broker`` an embedded broker runs in the process;
+``--rig`` runs the rig there too (``flexlift live tanker --rig``: the whole chain, one
+command).
+
+Exit codes: 0 when it ended as asked (arrived, the time, or SIGINT), 1 when ``--until
+arrived`` ended without arrival, 2 for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import threading
+import time
+
+from flexlift.cli._common import add_scenario_arg, help_text, positive_float, scenario_from
+from flexlift.errors import InputError
+
+
+def _until(text: str):
+    if text == "arrived":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0:
+        raise InputError("--until", text, "use arrived or a time [s] > 0 since filling began")
+    return value
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("live", help="run a lift over MQTT: read, control, alarm, log",
+                       description=help_text(__doc__))
+    add_scenario_arg(p)
+    p.add_argument("--broker", default=None, help="mqtt://HOST[:PORT] (default: embedded)")
+    p.add_argument("--out", required=True, help="folder of the log and the report")
+    p.add_argument("--control", choices=("master", "advise"), default="master")
+    p.add_argument("--until", default="arrived", help="arrived (default) or a time [s]")
+    p.add_argument("--rig", action="store_true", help="run the rig in this process too")
+    p.add_argument("--speed", type=positive_float("--speed"), default=1.0,
+                   help="--rig: the rig's speed, times real time (default 1)")
+    p.add_argument("--lift", default=None, help="the lift's name in the topics "
+                   "(default: the scenario's)")
+    p.add_argument("--no-plan", action="store_true",
+                   help="leave the plan's simulation out of the report")
+    p.add_argument("--wall-limit", type=positive_float("--wall-limit"), default=math.inf,
+                   help="end after this many seconds of this machine's clock")
+    p.set_defaults(func=_main)
+
+
+def _say(line: str) -> None:
+    sys.stdout.write(f"flexlift live: {line}\n")
+    sys.stdout.flush()
+
+
+def _main(args: argparse.Namespace) -> int:
+    from flexlift.live.broker import EmbeddedBroker, parse_broker
+    from flexlift.live.messages import lift_name
+    from flexlift.live.run import live_folder
+
+    until = _until(args.until)
+    address = parse_broker(args.broker) if args.broker else None
+    scenario = scenario_from(args)
+    lift = lift_name(args.lift or scenario.name)
+    embedded = None
+    if address is None:
+        embedded = EmbeddedBroker().start()
+        address = embedded.address
+        _say(f"embedded broker on {address.url}")
+    try:
+        with live_folder(args.out, lift) as (folder, log):
+            outcome, summary = _run(args, scenario, lift, address, log, until, folder)
+    finally:
+        if embedded is not None:
+            embedded.stop()
+    _say(f"ended: {outcome.reason} at t = {outcome.t_end:.1f} s; "
+         f"report in {args.out}/report.md")
+    return 1 if until == "arrived" and outcome.reason != "arrived" and \
+        outcome.reason != "interrupted" else 0
+
+
+def _run(args, scenario, lift, address, log, until, folder):
+    from flexlift.live.master import Master
+    from flexlift.live.mqtt import Link
+    from flexlift.live.run import finish_report
+    from flexlift.live.session import Live
+
+    master = Master(scenario)
+    rig_thread, rig = None, None
+    if args.rig:
+        from flexlift.live.rig import Rig
+
+        rig = Rig(scenario, Link(address, (), "rig"), lift, speed=args.speed)
+        rig.link.topics = [rig.command_topics()]
+    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live")
+    if not link.start():
+        _say(f"no broker answering at {address.url} yet: waiting (reconnecting)")
+    live = Live(scenario, link, log, lift, args.control, _say,
+                rate=args.speed if args.rig else None, periods=rig and rig.periods(),
+                master=master)
+    stop = threading.Event()
+    if rig is not None:
+        rig.link.start()
+        rig_thread = threading.Thread(target=rig.run, args=(stop,), name="flexlift-rig",
+                                      daemon=True)
+        rig_thread.start()
+    _say(f"{args.control} on {address.url}, lift {lift}: {len(master.bags)} controlled bags")
+    try:
+        outcome = live.run(until, stop, epoch=time.time(), wall_limit=args.wall_limit)
+    finally:
+        stop.set()
+        if rig_thread is not None:
+            rig_thread.join(10)
+            rig.link.stop()
+        link.stop()
+    summary = finish_report(folder, scenario, outcome, lift, args.control, not args.no_plan,
+                            rig=rig)
+    return outcome, summary
