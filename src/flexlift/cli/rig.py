@@ -27,7 +27,6 @@ def add_parser(sub) -> None:
                    help="times real time (default 1)")
     p.add_argument("--lift", default=None, help="the lift's name in the topics "
                    "(default: the scenario's)")
-    p.add_argument("--seed", type=int, default=0, help="the sensors' noise and dropouts")
     p.add_argument("--wall-limit", type=positive_float("--wall-limit"), default=math.inf,
                    help="end after this many seconds of this machine's clock")
     p.set_defaults(func=_main)
@@ -43,12 +42,12 @@ def _main(args: argparse.Namespace) -> int:
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
     link = Link(address, (), "rig")
-    rig = Rig(scenario, link, lift, speed=args.speed, seed=args.seed)
+    rig = Rig(scenario, link, lift, speed=args.speed)
     link.topics = [rig.command_topics()]
     if not link.start():
         sys.stdout.write(f"flexlift rig: no broker at {address.url} yet: reconnecting\n")
     sys.stdout.write(f"flexlift rig: lift {lift} on {address.url} at {args.speed:g}x, "
-                     f"{len(rig.bench.sensors)} sensors\n")
+                     f"{len(rig.tap.sensors)} sensors\n")
     sys.stdout.flush()
     stop = threading.Event()
     try:

@@ -6,7 +6,8 @@ kept (logged, marked) but not taken as the sensor's present value. The lift's cl
 latest reading time seen, run on between readings at the rate lift time has been passing per
 second of this machine's clock (1 for a real lift; the rig's ``--speed`` for a faster rig:
 estimated from the readings, or given). A sensor is *silent* once the clock is past its last
-reading by twice its period (its declared period, or the interval seen between its readings).
+reading by twice its period (its declared period, or the interval seen between its readings)
+and by :data:`SILENT_WALL_S` of this machine's clock.
 """
 
 from __future__ import annotations
@@ -16,8 +17,11 @@ from collections import deque
 
 #: the speed of a bag is the least-squares slope of its heights over this much lift time [s]
 SPEED_WINDOW_S = 2.0
-#: silent: no reading for this many periods
+#: silent: no reading for this many periods ...
 SILENT_PERIODS = 2.0
+#: ... and for at least this long on this machine's clock [s] (a rig at many times real time
+#: delivers in bursts: its periods are milliseconds of wall time)
+SILENT_WALL_S = 0.3
 #: weight of a new interval in a sensor's learnt period, and of a new clock-rate sample
 LEARN = 0.2
 #: the clock's rate is re-estimated over at least this much wall time [s]
@@ -99,7 +103,8 @@ class Board:
         for sensor in sorted(set(self.last) | set(self.declared)):
             period = self.period(sensor)
             last = self.last.get(sensor, (0.0, None))[0]
-            if period is not None and now - last > SILENT_PERIODS * period:
+            if period is not None and now - last > max(SILENT_PERIODS * period,
+                                                       SILENT_WALL_S * self.rate):
                 out.append(sensor)
         return out
 

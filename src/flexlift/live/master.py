@@ -8,7 +8,8 @@ What the laws take, from what the bags report (docs/reference/messages.md#live):
   (the pressure gauge of the bag's lift point);
 - upward speed [m/s]: the board's slope of the depths over its window;
 - gas volume V [m^3]: the load cell, the sling force being the bag's buoyancy (its drag at
-  the ascent's speeds is below a thousandth of it): V = F / (rho g), the inverse of
+  the ascent's speeds is below a thousandth of it): V = F / (rho g), low-passed
+  (:data:`VOLUME_GAIN`), the inverse of
   :func:`flexlift.physics.gas.buoyancy`;
 - separated: the bag point has risen :data:`SEPARATED_RISE_M` (the plant's own moment of
   separation is not on the network).
@@ -25,6 +26,10 @@ from flexlift.physics.gas import buoyancy
 
 #: a bag point risen this far above its start has separated from the seabed [m]
 SEPARATED_RISE_M = 0.1
+#: the volume from the load cell is low-passed, this gain per control sample: a reading held
+#: between samples steps by its noise (5 kN, 0.5 m^3) once a second, which the deficit's rate
+#: in the fill law would take as a fast change
+VOLUME_GAIN = 0.1
 
 
 class Master:
@@ -50,11 +55,13 @@ class Master:
             force = board.value(bag, "sling_force")
             if depth is None or force is None:
                 return False
-            if np.isnan(self.depth0[j]):
+            first = bool(np.isnan(self.depth0[j]))
+            if first:
                 self.depth0[j] = depth
             self._z[j] = self.depth0[j] - depth
             self._zd[j] = board.speed(bag) or 0.0
-            self._V[j] = max(force, 0.0) / buoyancy(1.0, self.rho_g)
+            volume = max(force, 0.0) / buoyancy(1.0, self.rho_g)
+            self._V[j] = volume if first else self._V[j] + VOLUME_GAIN * (volume - self._V[j])
             self.separated[j] |= self._z[j] > SEPARATED_RISE_M
         return True
 

@@ -26,8 +26,8 @@ QUANTITIES = {
     "depth": ("m", "both", 0.0, 12_000.0),  # of the lift point, its pressure gauge
     "pitch": ("rad", "both", -math.pi / 2, math.pi / 2),  # inclinometer
     "sling_force": ("N", "bag", -1e5, 1e9),  # load cell
-    "fill_flow": ("m3/s", "bag", 0.0, 100.0),  # free air, the manifold's meter
-    "purge": ("1", "bag", 0.0, 1.0),  # purge valve opening, its feedback
+    "fill_flow": ("m3/s", "bag", -0.1, 100.0),  # free air, the manifold's meter
+    "purge": ("1", "bag", -0.1, 1.1),  # purge valve opening, its feedback (and its noise)
     "supply_pressure": ("Pa", "bag", 0.0, 1e8),
 }
 #: the source name of the hull's own sensors

@@ -2,7 +2,8 @@
 the scenario, simulated by the compiled loop in commanded mode
 (:meth:`flexlift.ascent.loop.Ascent.command`), in real time or ``speed`` times faster: each
 sensor of the scenario's ``sensors:`` section published at its rate with its noise, latency
-and dropouts (:mod:`flexlift.sensors`), the valve commands received obeyed (a valve with no
+and dropouts (:class:`flexlift.sensors.tap.SensorTap`: the sensors of ``flexlift simulate
+--sensor-log``), the valve commands received obeyed (a valve with no
 new command stays where it is), the scenario's faults run as the simulation runs them, and
 said to no one.
 
@@ -15,7 +16,6 @@ behind (the machine too slow for ``speed``) it runs on without sleeping and coun
 
 from __future__ import annotations
 
-import heapq
 import math
 import time
 
@@ -28,23 +28,21 @@ class Rig:
     """The rig of ``scenario`` for lift ``lift`` over ``link``
     (:class:`~flexlift.live.mqtt.Link`, subscribed to :meth:`command_topics`)."""
 
-    def __init__(self, scenario, link, lift: str, speed: float = 1.0, seed: int = 0,
+    def __init__(self, scenario, link, lift: str, speed: float = 1.0,
                  duration: float | None = None):
-        from flexlift.sensors.rig import SensorBench
+        from flexlift.sensors.tap import SensorTap
 
         self.scenario, self.link, self.lift, self.speed = scenario, link, lift, float(speed)
         self.ascent = prepare(scenario, "commanded", duration)
         self.names = list(self.ascent.plant.names)
         self.index = {self.ascent.plant.names[i]: j for j, i in enumerate(self.ascent.controllers.bags)}
-        self.bench = SensorBench(scenario, self.ascent, seed)
+        self.tap = SensorTap(self.ascent)
         self.tally = Tally()
         self.last_seq: dict[tuple[str, str], int] = {}
         self.applied = self.repeats = 0
         self.lag_s = 0.0
         self.published = 0
         self.result = None
-        self._pending: list = []  # (publish time, n, topic, payload)
-        self._n = 0
 
     def command_topics(self) -> str:
         """The topics the rig subscribes to."""
@@ -52,7 +50,7 @@ class Rig:
 
     def periods(self) -> dict:
         """Each sensor's period [s], by name."""
-        return {s.name: s.period_s for s in self.bench.sensors}
+        return {s.name: s.period_s for s in self.tap.sensors}
 
     def obey(self) -> None:
         """Apply the commands received since the last call (newest sequence number only)."""
@@ -72,15 +70,12 @@ class Rig:
                 self.ascent.command(j, opening=command.value)
             self.applied += 1
 
-    def _publish_due(self, t: float) -> None:
-        for reading in self.bench.readings(t):  # taken now, sent after their latency
-            self._n += 1
-            topic = sensor_topic(self.lift, reading.source, reading.quantity)
-            heapq.heappush(self._pending, (reading.time + reading.latency, self._n, topic,
-                                           reading_payload(reading.time, reading.value)))
-        while self._pending and self._pending[0][0] <= t + 1e-9:
-            _, _, topic, payload = heapq.heappop(self._pending)
-            self.link.publish(topic, payload, QOS_READING)
+    def _publish_due(self) -> None:
+        """Publish the readings delivered by now (taken, and their latency passed)."""
+        for reading in self.tap.take():
+            source, _, quantity = reading.sensor.rpartition("/")
+            self.link.publish(sensor_topic(self.lift, source, quantity),
+                              reading_payload(reading.time_s, reading.value), QOS_READING)
             self.published += 1
 
     def run_loop(self, stop, wall_limit: float = math.inf) -> None:
@@ -91,14 +86,14 @@ class Rig:
         start = time.monotonic()
         while not stop.is_set() and time.monotonic() - start < wall_limit:
             self.obey()
-            k = int(run.state.counters[0])
-            if k > settings.n_steps:
+            k, k_next = int(run.state.counters[0]), run.next_stop()
+            if k_next is None:
                 break
-            k_stop = min(run.next_stop(), k - k % k_period + k_period)
+            k_stop = min(k_next, k - k % k_period + k_period)
             if run.after_chunk(run._advance(k_stop)):
                 break
             t = (int(run.state.counters[0]) - 1) * settings.dt
-            self._publish_due(t)
+            self._publish_due()
             ahead = t / self.speed - (time.monotonic() - start)
             if ahead > 0:
                 stop.wait(ahead)

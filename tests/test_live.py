@@ -1,0 +1,171 @@
+"""Live operation through a real Mosquitto (issue 42): the master controller driving the rig
+with the broker restarted midway and hostile messages; ``kill -9`` of live and its log read
+back; ``live --rig`` on the embedded broker end to end. (The tanker lifted safe by the master
+via the rig is not tested: it is not achieved yet, docs/reference/live.md.)"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from importlib.resources import files
+
+import paho.mqtt.client as mqtt
+import pytest
+from live_helpers import mosquitto, wait_until  # noqa: F401 - the fixture
+
+#: the rig's speed in the tests (times real time)
+SPEED = 100.0
+SENSORS = """
+sensors:
+  seed: 3
+  depth: {rate_Hz: 1.0, noise_m: 0.02, latency_s: 0.2}
+  pitch: {at: [hull]}
+  sling_force: {rate_Hz: 1.0, latency_s: 0.1, dropout: 0.02}
+  fill_flow: null
+  purge: {at: [bag_1, bag_2, bag_3, bag_4], rate_Hz: 1.0}
+  supply_pressure: null
+"""
+HOSTILE = [
+    ("flexlift/tk/sensor/bag_1/depth", b"not json", "not_json"),
+    ("flexlift/tk/sensor/bag_1/depth", b'{"time": 1, "value": NaN}', "not_finite"),
+    ("flexlift/tk/sensor/bag_1/depth", b'{"time": 1, "value": "deep"}', "wrong_type"),
+    ("flexlift/tk/sensor/bag_99/depth", b'{"time": 1, "value": 3}', "unknown_bag"),
+    ("flexlift/tk/sensor/bag_1/temperature", b'{"time": 1, "value": 3}', "unknown_quantity"),
+    ("flexlift/tk/sensor/bag_1/depth", b"\x00" * 10_000, "bad_value"),
+]
+
+
+def _scenario_file(tmp_path):
+    text = (files("flexlift.scenarios") / "tanker.yaml").read_text() + SENSORS
+    path = tmp_path / "tanker-live.yaml"
+    path.write_text(text)
+    return path
+
+
+def _flexlift(*args, **kw):
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    return subprocess.Popen([sys.executable, "-m", "flexlift", *args], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+
+
+def _hostile(url_port):
+    client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2)
+    client.connect("127.0.0.1", url_port)
+    client.loop_start()
+    for topic, payload, _ in HOSTILE:
+        client.publish(topic, payload, qos=1).wait_for_publish(5)
+    client.loop_stop()
+    client.disconnect()
+
+
+def test_master_through_mosquitto_survives_a_restart_and_hostile_messages(mosquitto, tmp_path):  # noqa: F811
+    """The master controller on the network's readings drives the rig (100x) through the
+    pull; the broker is restarted midway (readings stale: filling stopped and said, then
+    control resumed; both ends reconnect; no command applied twice) and hostile messages
+    are counted by reason, logged, and crash nothing."""
+    pytest.importorskip("flexlift.sensors.tap")  # the sensors of issue 43
+    from flexlift.live.broker import parse_broker
+    from flexlift.live.log import LiveLog, read_table
+    from flexlift.live.mqtt import Link
+    from flexlift.live.rig import Rig
+    from flexlift.live.session import Live
+    from flexlift.scenario import load_scenario
+
+    scenario = load_scenario(_scenario_file(tmp_path))
+    address = parse_broker(mosquitto.url)
+    rig = Rig(scenario, Link(address, ["flexlift/tk/command/#"], "rig"), "tk", speed=SPEED)
+    link = Link(address, ["flexlift/tk/sensor/#"], "live")
+    assert link.start() and rig.link.start()
+    log = LiveLog(tmp_path / "live.sqlite", {"lift": "tk"})
+    said = []
+    live = Live(scenario, link, log, "tk", "master", said.append, periods=rig.periods())
+    abort = threading.Event()
+
+    def restart():
+        if wait_until(lambda: live.board.t_max > 300.0 or abort.is_set(), 40.0):
+            _hostile(mosquitto.port)
+            wait_until(lambda: live.tally.total >= len(HOSTILE), 5.0)
+            mosquitto.stop()
+            time.sleep(1.0)
+            mosquitto.start()
+
+    threads = [threading.Thread(target=rig.run, args=(abort, 60.0)),
+               threading.Thread(target=restart)]
+    for t in threads:
+        t.start()
+    try:
+        outcome = live.run(1000.0, abort, wall_limit=50.0)
+    finally:
+        abort.set()
+        for t in threads:
+            t.join(30)
+        link.stop()
+        rig.link.stop()
+        log.close()
+    assert outcome.reason == "time"
+    assert link.connects >= 2 and rig.link.connects >= 2, "both reconnected"
+    assert any("readings stale" in line and "filling stopped" in line for line in said), said
+    assert any("readings back" in line for line in said), said
+    assert {r: live.tally.counts[r] for _, _, r in HOSTILE} == {r: 1 for _, _, r in HOSTILE}
+    assert len(read_table(tmp_path / "live.sqlite", "dropped")) == len(HOSTILE)
+    commands = read_table(tmp_path / "live.sqlite", "commands")
+    assert outcome.commands == len(commands) > 4 and 4 <= rig.applied <= len(commands)
+    assert rig.ascent.state.n.sum() > rig.ascent.plant.initial_moles().sum(), "it filled"
+
+
+def test_kill_9_of_live_then_the_log_reads_back(tmp_path):
+    """``live --rig`` (embedded broker) killed with SIGKILL: its log opens and holds every
+    reading received up to a second before the kill, in time order."""
+    pytest.importorskip("flexlift.sensors.tap")  # the sensors of issue 43
+    from flexlift.live.log import read_readings, read_table
+
+    proc = _flexlift("live", str(_scenario_file(tmp_path)), "--rig", "--speed", "100",
+                     "--out", str(tmp_path / "out"), "--lift", "tk", "--no-plan")
+    log = tmp_path / "out" / "live.sqlite"
+    try:
+        def receiving():
+            try:
+                return len(read_table(log, "readings")) > 200
+            except Exception:  # noqa: BLE001 - not there yet
+                return False
+        assert wait_until(receiving, 60.0, 0.2), proc.stderr.read() if proc.poll() else ""
+        time.sleep(1.3)
+        killed_at = time.time()
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    rows = list(read_readings(log))
+    times = [r["time"] for r in rows]
+    assert times == sorted(times)
+    last_recv = max(r["recv"] for r in rows)
+    assert killed_at - last_recv < 1.0, "at most the last second lost"
+    assert {r["sensor"].split("/")[1] for r in rows} >= {"depth", "sling_force", "pitch"}
+
+
+def test_live_rig_embedded_end_to_end(tmp_path):
+    """``flexlift live SCENARIO --rig`` with no broker: the embedded broker, the rig and live
+    in one command, ended at a time, with its report."""
+    pytest.importorskip("flexlift.sensors.tap")  # the sensors of issue 43
+    proc = _flexlift("live", str(_scenario_file(tmp_path)), "--rig", "--speed", "200",
+                     "--out", str(tmp_path / "out"), "--until", "400", "--no-plan",
+                     "--lift", "tk")
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert "embedded broker on mqtt://127.0.0.1:" in out
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert report["lift"]["ended"] == "time" and report["lift"]["end_time_s"] >= 400
+    assert report["lift"]["readings"] > 400 * 15 * 0.8
+    assert report["lift"]["commands"] > 0
+    assert (tmp_path / "out" / "report.md").read_text().startswith("# Lift tk (master)")
+
+
+def test_live_refuses_bad_options(tmp_path):
+    from flexlift.cli import main
+
+    assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--until", "soon"]) == 2
+    assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--broker", "http://x"]) == 2
