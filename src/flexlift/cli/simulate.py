@@ -32,6 +32,9 @@ def add_parser(sub) -> None:
                    help="control mode (default: the scenario's control.mode)")
     p.add_argument("--duration", type=key_option("--duration", "simulation.duration_s"), default=None,
                    help="largest simulated time [s] (default: simulation.duration_s)")
+    p.add_argument("--sensor-log", metavar="FILE", default=None,
+                   help="also write the readings the scenario's sensors would have given (a new "
+                        "file: JSON lines, CSV if it ends .csv; docs/reference/sensor-log.md)")
     add_out_arg(p, "results (netCDF, CSV) and figures")
     add_json_arg(p)
     p.set_defaults(func=_main)
@@ -42,7 +45,8 @@ def _main(args: argparse.Namespace) -> int:
     # --duration is simulation.duration_s: checked with the scenario's other keys (steps, rows)
     with_options(scenario, {"--duration": ("simulation.duration_s", args.duration)})
     with writing(args.out, "simulate") as folder:
-        out = run_stage(scenario, folder, control=args.control, duration=args.duration)
+        out = run_stage(scenario, folder, control=args.control, duration=args.duration,
+                        sensor_log=args.sensor_log)
         if folder is not None:
             copy_controller_files(scenario, folder)  # the user's .fis files, with checksums
     s = out.summary

@@ -49,6 +49,7 @@ from flexlift.scenario.defaults import (
 from flexlift.scenario.file import decode, dump_sections, dump_yaml, load_yaml, read_bytes
 from flexlift.scenario.messages import first_error, format_error
 from flexlift.scenario.pipe import Pipe, derive, underive
+from flexlift.scenario.sensors import Sensors
 from flexlift.scenario.types import (
     MAX_BAG_LIFT_T,
     MAX_ELEMENTS,
@@ -593,6 +594,7 @@ class Scenario(_Section):
     faults: Annotated[list[Fault], Field(max_length=MAX_ITEMS)] = []
     disturbance: Disturbance = Disturbance()
     simulation: Simulation = Simulation()
+    sensors: Sensors | None = None  # the lift's sensors (scenario/sensors.py); none: none
 
     @model_validator(mode="before")
     @classmethod
@@ -672,13 +674,18 @@ class Scenario(_Section):
 
     def to_yaml(self) -> str:
         """The scenario with every default filled in, as YAML (repeatable input)."""
-        return dump_yaml(self.model_dump(mode="json"))
+        data = self.model_dump(mode="json")
+        if data.get("sensors") is None:  # no sensors: the text of a scenario before them
+            data.pop("sensors", None)
+        return dump_yaml(data)
 
     def checksum(self) -> str:
         """SHA-256 of the canonical YAML: two runs with the same checksum had the same input.
         A user's .fis file counts by its contents (its SHA-256), not by where it lies, so the
         copy in an output folder has the checksum of the original."""
         data = self.model_dump(mode="json")
+        if data.get("sensors") is None:  # no sensors: the checksum of a scenario before them
+            data.pop("sensors", None)
         for key, path in self.controller_files().items():
             section, sub_, _ = key.split(".")
             data[section][sub_]["fis_file"] = "sha256:" + file_sha256(path)

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from flexlift import constants as C
-from flexlift.errors import SimulationError
+from flexlift.errors import InputError, SimulationError
 from flexlift.output.pointtables import event_rows, point_tables
 from flexlift.output.stage import Figure, StageOutput, Table
 from flexlift.scenario import ControlMode
@@ -185,17 +185,24 @@ def stress_table(result, scenario, mode: str) -> Table:
 
 
 def run_stage(scenario, out: Path | None, control: str | None = None,
-              duration: float | None = None, progress=None, engine="table") -> StageOutput:
+              duration: float | None = None, progress=None, engine="table",
+              sensor_log: Path | None = None) -> StageOutput:
     """Simulate one control mode; add it to ``results.nc`` (every mode simulated into ``out``
     is one file, :func:`flexlift.output.results.save_netcdf`) and write its CSV tables and
     figures under ``out`` when given. A numerics failure still writes the partial results and
-    is reported in the summary and warnings."""
+    is reported in the summary and warnings. ``sensor_log``: also write the readings of the
+    scenario's sensors to this new file (:func:`flexlift.sensors.tap.run_with_log`; JSON
+    lines, CSV when it ends ``.csv``), written whole or not at all."""
     from flexlift.ascent import simulate
 
     mode = control or scenario.control.mode
     warnings = []
     try:
-        result = simulate(scenario, control=mode, duration=duration, engine=engine, progress=progress)
+        if sensor_log is None:
+            result = simulate(scenario, control=mode, duration=duration, engine=engine,
+                              progress=progress)
+        else:
+            result = _with_sensor_log(scenario, mode, duration, engine, progress, sensor_log)
     except SimulationError as exc:
         result = exc.partial
         warnings.append(str(exc))
@@ -218,6 +225,29 @@ def run_stage(scenario, out: Path | None, control: str | None = None,
         tables.append(stress_table(result, scenario, mode))
     return StageOutput(name=f"simulate:{mode}", summary=summary, figures=figures, tables=tables,
                        warnings=warnings, criteria=result.criteria)
+
+
+def _with_sensor_log(scenario, mode, duration, engine, progress, path: Path):
+    """The run of :func:`flexlift.ascent.simulate`, stepped with its sensors' log written to
+    ``path`` (a new file; written beside it and renamed when whole)."""
+    from flexlift.ascent.loop import prepare
+    from flexlift.plumbing.atomic import atomic_file
+    from flexlift.sensors.tap import run_with_log
+
+    if Path(path).exists() or Path(path).is_symlink():
+        raise InputError("--sensor-log", str(path), "already exists: flexlift writes a new log "
+                         "and never overwrites a file (remove it or name another)")
+    run = prepare(scenario, mode, duration, engine)
+    with atomic_file(path) as tmp:
+        try:
+            result, _ = run_with_log(run, tmp)
+        except SimulationError as exc:  # the log up to the failure is the lift's log
+            error = exc
+        else:
+            error = None
+    if error is not None:
+        raise error
+    return result
 
 
 #: the outcome of an ascent in the lead of its section
