@@ -1,5 +1,5 @@
 """The live log: every reading, command, alarm and dropped message, with the time it was
-received, appended to SQLite as it comes (docs/reference/messages.md#the-live-log).
+received, appended to SQLite as it comes (docs/reference/live.md#the-live-log).
 
 SQLite in WAL mode with ``synchronous=NORMAL``: a committed transaction survives the process
 being killed at any moment (``kill -9``; only a power cut may lose the last commits), and

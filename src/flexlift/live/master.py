@@ -2,7 +2,8 @@
 :mod:`flexlift.control.controller` (the same compiled sample the simulation runs, no copy),
 fed each control period from the :class:`~flexlift.live.board.Board`.
 
-What the laws take, from what the bags report (docs/reference/messages.md#live):
+What the laws take, from what the bags report
+(docs/reference/live.md#the-master-controller):
 
 - height z [m] above the bag point's start: the first depth reading minus the present one
   (the pressure gauge of the bag's lift point);

@@ -21,15 +21,18 @@ from collections import Counter
 from datetime import datetime, timedelta
 from typing import NamedTuple
 
-#: quantity: (unit, where it is measured, lowest and highest plausible value)
-QUANTITIES = {
-    "depth": ("m", "both", 0.0, 12_000.0),  # of the lift point, its pressure gauge
-    "pitch": ("rad", "both", -math.pi / 2, math.pi / 2),  # inclinometer
-    "sling_force": ("N", "bag", -1e5, 1e9),  # load cell
-    "fill_flow": ("m3/s", "bag", -0.1, 100.0),  # free air, the manifold's meter
-    "purge": ("1", "bag", -0.1, 1.1),  # purge valve opening, its feedback (and its noise)
-    "supply_pressure": ("Pa", "bag", 0.0, 1e8),
-}
+from flexlift.scenario.sensors import HULL_QUANTITIES
+from flexlift.scenario.sensors import QUANTITIES as SENSOR_QUANTITIES
+
+#: the lowest and highest value each quantity can plausibly read (SI; noise included)
+RANGES = {"depth": (0.0, 12_000.0), "pitch": (-math.pi / 2, math.pi / 2),
+          "sling_force": (-1e5, 1e9), "fill_flow": (-0.1, 100.0), "purge": (-0.1, 1.1),
+          "supply_pressure": (0.0, 1e8)}
+#: quantity: (unit, where it is measured: "bag" or "both" (bags and the hull), lowest and
+#: highest plausible value); the quantities and units are the sensors' own
+#: (:data:`flexlift.scenario.sensors.QUANTITIES`)
+QUANTITIES = {q: (unit, "both" if q in HULL_QUANTITIES else "bag", *RANGES[q])
+              for q, (unit, _) in SENSOR_QUANTITIES.items()}
 #: the source name of the hull's own sensors
 HULL = "hull"
 #: the two valves a command moves
