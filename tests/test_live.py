@@ -169,3 +169,61 @@ def test_live_refuses_bad_options(tmp_path):
 
     assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--until", "soon"]) == 2
     assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--broker", "http://x"]) == 2
+
+
+def test_sigint_ends_live_cleanly(tmp_path):
+    """SIGINT to ``live --rig``: it stops, closes its log and writes its report, exit 0."""
+    pytest.importorskip("flexlift.sensors.tap")
+    from flexlift.live.log import read_table
+
+    proc = _flexlift("live", str(_scenario_file(tmp_path)), "--rig", "--speed", "50",
+                     "--out", str(tmp_path / "out"), "--lift", "tk", "--no-plan")
+    log = tmp_path / "out" / "live.sqlite"
+    try:
+        def receiving():
+            try:
+                return len(read_table(log, "readings")) > 100
+            except Exception:  # noqa: BLE001 - not there yet
+                return False
+        assert wait_until(receiving, 60.0, 0.2)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    assert "ended: interrupted" in out
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert report["lift"]["ended"] == "interrupted"
+    assert report["lift"]["readings"] == len(read_table(log, "readings"))
+
+
+class _Inbox:
+    """A stand-in link holding messages to drain."""
+
+    def __init__(self, messages):
+        self.messages = messages
+
+    def drain(self):
+        out, self.messages = self.messages, []
+        return out
+
+
+def test_the_rig_applies_each_command_once_and_never_an_older_one(tanker):
+    pytest.importorskip("flexlift.sensors.tap")
+    from flexlift.live.messages import command_payload
+    from flexlift.live.rig import Rig
+
+    fill, purge = "flexlift/tk/command/bag_1/fill", "flexlift/tk/command/bag_2/purge"
+    inbox = _Inbox([(0.0, fill, command_payload(5, 1.0, 0.1)),
+                    (0.0, fill, command_payload(5, 1.0, 0.1)),   # a repeat (QoS 1)
+                    (0.0, fill, command_payload(4, 0.9, 0.3)),   # older, arriving late
+                    (0.0, purge, command_payload(4, 0.9, 0.5)),  # another valve's own order
+                    (0.0, fill, b"junk")])
+    rig = Rig(tanker, inbox, "tk")
+    rig.obey()
+    assert (rig.applied, rig.repeats, rig.tally.total) == (2, 2, 1)
+    cs = rig.ascent.control_state
+    assert cs.fill[rig.index["bag_1"]] == pytest.approx(0.1)
+    assert cs.opening[rig.index["bag_2"]] == pytest.approx(0.5)
+    assert cs.fill[rig.index["bag_2"]] == 0.0 and cs.opening[rig.index["bag_1"]] == 0.0
