@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import kernel, simulate
 from flexlift.ascent.loop import Ascent
 from flexlift.ascent.plant import coupled_plant
@@ -24,7 +25,6 @@ from flexlift.ascent.records import (
 from flexlift.ascent.state import RET_DONE
 from flexlift.constants import R_GAS
 from flexlift.physics.surface import volume_from_top, waterline_volume
-from flexlift.scenario import load_scenario
 
 INCIDENT = Path(__file__).parent / "data" / "flange_incident.yaml"
 SC = load_scenario(INCIDENT)

@@ -4,9 +4,9 @@ tanker default is required, derived by a named rule, or assumed and listed."""
 import pytest
 
 from flexlift import constants as C
+from flexlift import load_scenario
 from flexlift.cli import main
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario
 from flexlift.scenario.defaults import E_STEEL, POLICY
 from flexlift.scenario.schema import parse_scenario
 from flexlift.structure.hull import hull_from_scenario

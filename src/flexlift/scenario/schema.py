@@ -14,7 +14,7 @@ elements, steps x bags), checked for every scenario. Numbers are strict: an inte
 may be given for a real number, but never a boolean or text (``elements: true`` or
 ``length_m: "78"`` are errors, not 1 and 78), and never NaN or infinity.
 
-Load with :func:`load_scenario` (a built-in name such as ``"tanker"`` or a path).
+Read with :func:`read_scenario` (a built-in name such as ``"tanker"`` or a path).
 """
 
 from __future__ import annotations
@@ -755,8 +755,11 @@ def _resolve_files(scenario: Scenario, folder: Path) -> Scenario:
     return scenario.with_changes(**moved) if moved else scenario
 
 
-def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
-    """Load a built-in scenario by name (default ``tanker``) or a YAML file by path.
+def read_scenario(name_or_path: str | Path | None = None) -> Scenario:
+    """Read a built-in scenario by name (default ``tanker``) or a YAML file by path, as
+    written: a user's hull without a bag choice keeps the first standard size tried, marked
+    ``defaulted["lift.catalogue_bag"] == "derived"``. :func:`flexlift.load_scenario`, what
+    every way in calls, then chooses that bag on the lift plan (a floor above this one).
 
     The file is read defensively (:mod:`flexlift.scenario.file`): a regular UTF-8 file of at
     most 1 MB, one YAML document, no duplicate keys, bounded nesting and aliases; an empty
@@ -771,9 +774,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     Returns
     -------
     Scenario
-        The validated scenario, every default filled in (units in the key names); a user's
-        hull without a bag choice gets the largest standard bag whose clusters fit on it
-        (:func:`flexlift.loaded`, as on the command line and in a sweep's base).
+        The validated scenario, every default filled in (units in the key names).
 
     Raises
     ------
@@ -782,13 +783,13 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
 
     Examples
     --------
-    >>> from flexlift.scenario import load_scenario
-    >>> tanker = load_scenario("tanker")
+    >>> from flexlift.scenario import read_scenario
+    >>> tanker = read_scenario("tanker")
     >>> tanker.hull.length_m, tanker.lift.layout
     (78.02, 'mode_nodes')
     >>> tanker.with_changes(**{"hull.elements": 40}).hull.elements
     40
-    >>> load_scenario("no-such-wreck.yaml")  # doctest: +ELLIPSIS
+    >>> read_scenario("no-such-wreck.yaml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     flexlift.errors.InputError: ...no such file...
@@ -815,7 +816,4 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         data = {**data, "lift": {**lift, "catalogue_file": reading.absolute(
             path.parent / lift["catalogue_file"])}}
     scenario = parse_scenario(data, source=source)
-    scenario = _resolve_files(scenario, path.parent) if reading.exists(path) else scenario
-    import flexlift  # the package root: a user's hull gets its default bag (flexlift.loaded)
-
-    return flexlift.loaded(scenario)
+    return _resolve_files(scenario, path.parent) if reading.exists(path) else scenario
