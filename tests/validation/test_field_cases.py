@@ -2,6 +2,7 @@
 case's shipped scenario run and held inside the band its page states and argues."""
 
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -66,11 +67,15 @@ def test_grieg_comes_free_under_the_lift_the_law_predicts(grieg):
 
 
 # ---------------------------------------------------------------------------- Ehime Maru
-def test_ehime_maru_breaks_out_in_the_hours_the_field_saw():
+@pytest.fixture(scope="module")
+def ehime():
+    return simulate(load_scenario(CASES["ehime-maru"]["scenario"]), control="open-loop")
+
+
+def test_ehime_maru_breaks_out_in_the_hours_the_field_saw(ehime):
     """From the pull taken up to separation, the soil law gives a time within R-755's +-100 %
     of the 2 h the Navy reported, read as a factor of 2 either way (1 h to 4 h)."""
-    case = CASES["ehime-maru"]
-    r = simulate(load_scenario(case["scenario"]), control="open-loop")
+    case, r = CASES["ehime-maru"], ehime
     assert r.summary()["breakout_law"] == "soil"
     t_sep, measured = events(r)["separation"], case["breakout_after_slack_s"]
     factor = 1.0 + R755["time_accuracy"]
@@ -78,14 +83,19 @@ def test_ehime_maru_breaks_out_in_the_hours_the_field_saw():
 
 
 # -------------------------------------------------------------------------- IMCA flange
-def test_imca_flange_surfaces_spills_and_falls_back():
+@pytest.fixture(scope="module")
+def flange():
+    sc = load_scenario(CASES["imca-flange"]["scenario"])
+    return sc, simulate(sc, control="open-loop")
+
+
+def test_imca_flange_surfaces_spills_and_falls_back(flange):
     """The bag 25 % over its rating lifts the 0.6 t flange from 19 m, breaks the surface,
     loses most of its gas there, and the flange falls back onto the seabed."""
-    sc = load_scenario(CASES["imca-flange"]["scenario"])
+    sc, r = flange
     p = coupled_plant(sc)
     rated = CASES["imca-flange"]["bag_rating_t"] * C.TONNE / sc.environment.seawater_density_kg_m3
     assert float(p.bags.capacity[0]) >= CASES["imca-flange"]["capacity_over_rating"] * rated * 0.99
-    r = simulate(sc, control="open-loop")
     ev = events(r)
     assert ev["separation"] < ev["surface_breach"] < ev["resettle"]
     t, V = r.dataset.time.values, r.dataset.gas_volume.values[:, 0]
@@ -96,13 +106,18 @@ def test_imca_flange_surfaces_spills_and_falls_back():
 
 
 # --------------------------------------------------------------------------- IMCA spool
-def test_imca_spool_runs_away_from_its_buoyancy():
+@pytest.fixture(scope="module")
+def spool():
+    sc = load_scenario(CASES["imca-spool"]["scenario"])
+    return sc, simulate(sc, control="open-loop")
+
+
+def test_imca_spool_runs_away_from_its_buoyancy(spool):
     """50 kg over neutral at 55 msw: the open bags' gas expands as the spool rises, so it
     accelerates past 36 msw (where the diver cut free) to the surface; the lift at 36 msw over
     the lift at the seabed is the pressure ratio (the bags not yet full)."""
     case = CASES["imca-spool"]
-    sc = load_scenario(case["scenario"])
-    r = simulate(sc, control="open-loop")
+    sc, r = spool
     ds, ev = r.dataset, events(r)
     assert "separation" in ev and "surface_breach" in ev
     t, h = ds.time.values, ds.height.values.mean(axis=1)
@@ -148,3 +163,19 @@ def test_the_study_soil_band_against_the_cases_scatter():
     assert f["grieg-barge"] == pytest.approx(7.6, abs=0.1)
     assert sorted(k for k, x in f.items() if not low <= x <= high) == ["grieg-barge",
                                                                        "lee2016-vessel"]
+
+
+# ------------------------------------------------------------------ the summary's numbers
+def test_the_summary_page_quotes_these_runs(grieg, ehime, flange, spool):
+    """docs/validation/index.md states the runs' numbers: they are these runs' (a change of a
+    law that moves them must update the page)."""
+    page = (Path(__file__).parents[2] / "docs" / "validation" / "index.md").read_text()
+    sc, p, r = grieg
+    release = tonnes(p.wet_weight + float(p.seabed.H0.sum()), sc)
+    quoted = [f"{release:.0f} t (W′ + H₀", f"free in {events(r)['separation']:.0f} s",
+              f"{1.3 * tonnes(p.wet_weight, sc):.0f} t (1.3 W′)",
+              f"{events(ehime)['separation'] / 3600:.2f} h",
+              f"breaks the surface {events(flange[1])['surface_breach']:.1f} s",
+              f"resettles {events(flange[1])['resettle']:.0f} s"]
+    for text in quoted:
+        assert text in page, text
