@@ -303,6 +303,14 @@ class Seabed(_Section):
     release_time_s: real(0.001, MAX_TIME_S) = 30.0  # tau_r: suction release after separation
     contact_stiffness_N_m2: real(1.0e3, 1.0e10) = 5.0e6  # penalty spring per unit length [N/m per m]
     contact_damping_Ns_m2: real(0, 1.0e9) = 2.0e6  # penalty damper per unit length [N s/m per m]
+    # the held law (docs/theory/breakout-soil.md): timer (T_b, H0 from lift.breakout_factor) or
+    # soil (H0 from the soil's strength and embedment, relief by consolidation under the pull)
+    breakout_law: Literal["timer", "soil"] = "timer"
+    shear_strength_kPa: real(0.01, 1000) = 3.0  # soil law: undrained shear strength s_u at the base
+    embedment_m: real(0, 100) = 1.0  # soil law: depth of the hull's bottom below the mudline
+    drainage_length_m: real(0.01, 1000) = 1.0  # soil law: d, the pore water's path to the base
+    # soil law: c_v, an effective coefficient (calibrated, docs/theory/breakout-soil.md#calibration)
+    consolidation_coefficient_m2_s: real(1e-12, 100) = 5.0e-5
 
     @model_validator(mode="after")
     def _check(self) -> Seabed:
