@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.plant import coupled_plant
 from flexlift.physics import seabed
-from flexlift.scenario import load_scenario
 
 T = 1000.0  # [s] a consolidation time for the hand checks
 

@@ -9,11 +9,11 @@ import pytest
 import yaml
 
 from flexlift import constants as C
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.plant import coupled_plant
 from flexlift.physics import seabed
 from flexlift.physics.gas import ambient_pressure
-from flexlift.scenario import load_scenario
 from flexlift.sweep.studies import SOIL, default_laws
 
 CASES = yaml.safe_load((resources.files("flexlift") / "data" / "field_cases.yaml").read_text())
