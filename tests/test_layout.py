@@ -19,14 +19,16 @@ ALLOWED = {
     "physics": set(),  # the laws: first, used by the lift plan, the loop and the strength
     "control": {"scenario", "fuzzy", "physics"},
     "ascent": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control"},
+    "sensors": {"scenario", "physics", "ascent"},  # true values from the loop's records
     "output": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                "ascent"},
+    "live": {"scenario", "physics", "control", "ascent", "sensors", "output"},  # rig and live
     "stages": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-               "ascent", "output"},
+               "ascent", "output", "sensors"},
     "sweep": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
               "ascent", "output", "stages"},
     "cli": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-            "ascent", "output", "stages", "sweep"},
+            "ascent", "output", "stages", "sweep", "sensors", "live"},
 }
 TOP = {"constants", "errors", "_jit", "_struct", "_threads", "_worker_process", "__init__",
        "__main__"}

@@ -67,12 +67,12 @@ def test_master_through_mosquitto_survives_a_restart_and_hostile_messages(mosqui
     control resumed; both ends reconnect; no command applied twice) and hostile messages
     are counted by reason, logged, and crash nothing."""
     pytest.importorskip("flexlift.sensors.tap")  # the sensors of issue 43
+    from flexlift import load_scenario
     from flexlift.live.broker import parse_broker
     from flexlift.live.log import LiveLog, read_table
     from flexlift.live.mqtt import Link
     from flexlift.live.rig import Rig
     from flexlift.live.session import Live
-    from flexlift import load_scenario
 
     scenario = load_scenario(_scenario_file(tmp_path))
     address = parse_broker(mosquitto.url)
