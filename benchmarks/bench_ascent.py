@@ -101,7 +101,7 @@ def _baseline_in_this_run() -> dict | None:
     try:
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt),
                         BASELINE_COMMIT], check=True, capture_output=True)
-        code = ("import time, json; from flexlift.scenario import load_scenario; "
+        code = ("import time, json; from flexlift import load_scenario; "
                 "from flexlift.simulate import simulate; sc = load_scenario('tanker'); out = {}\n"
                 "for m in ('decentralized', 'coordinated'):\n"
                 "    w = []\n"
@@ -121,14 +121,14 @@ def _baseline_in_this_run() -> dict | None:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-_FIRST_CALL = ("import time; t = time.perf_counter(); from flexlift.scenario import load_scenario; "
+_FIRST_CALL = ("import time; t = time.perf_counter(); from flexlift import load_scenario; "
                "from flexlift.ascent import simulate; simulate(load_scenario('tanker')); "
                "print(time.perf_counter() - t)")
 
 _PIPELINE = """
 import json, resource, time, tracemalloc
 import numpy as np
-from flexlift.scenario import load_scenario
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 L, nb = 1000.0, 50
 bags = [{"name": f"bag_{k + 1}", "kind": "external", "x_m": float((k + 0.5) * L / nb),
@@ -159,10 +159,10 @@ def _subprocess(code: str, env=None, timeout=1800) -> str:
 
 
 def run(quick: bool = False) -> dict:
+    from flexlift import load_scenario
     from flexlift.ascent import kernel, simulate
     from flexlift.ascent.loop import Ascent
     from flexlift.ascent.plant import coupled_plant
-    from flexlift.scenario import load_scenario
 
     sc = load_scenario("tanker")
     simulate(sc, duration=10.0)  # load the compiled loop

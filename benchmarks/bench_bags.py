@@ -42,7 +42,7 @@ SIZES_T = (565.0, 150.0, 50.0, 20.0, 10.0)
 #: lifts (comma separated), argv[3] repeats; prints one JSON line
 _MEASURE = r"""
 import json, subprocess, sys, time
-from flexlift.scenario import load_scenario
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.loop import Ascent
 from flexlift.ascent.plant import coupled_plant

@@ -35,7 +35,7 @@ BOUND = 1.2
 
 
 def plans() -> dict:
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
 
     tanker = load_scenario("tanker")
     return {"tanker": tanker,

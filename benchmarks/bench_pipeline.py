@@ -15,7 +15,7 @@ import sys
 
 _CODE = """
 import json, resource, time
-from flexlift.scenario import load_scenario
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.plant import coupled_plant
 tanker = load_scenario("tanker")

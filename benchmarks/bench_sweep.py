@@ -57,8 +57,8 @@ VALVES = {"gas.fill_rate_max_m3_s": {"dist": "uniform", "low": 0.4, "high": 0.6}
 def _pinned_bags() -> list[dict]:
     """The tanker's nominal plan as ``lift.bags`` (only keys both trees know)."""
     sys.path.insert(0, str(ROOT / "src"))
+    from flexlift import load_scenario
     from flexlift.loads.clusters import with_default_bag
-    from flexlift.scenario import load_scenario
     from flexlift.sweep.studies import pin_plan
 
     pinned = pin_plan(with_default_bag(load_scenario("tanker")), "bench")[0]

@@ -6,7 +6,7 @@ matplotlib.use("Agg")
 
 @pytest.fixture(scope="session")
 def tanker():
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
 
     return load_scenario("tanker")
 

@@ -6,8 +6,8 @@ over the governing static case's, and the peak sling force beside its design loa
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
-from flexlift.scenario import load_scenario
 from flexlift.stages.simulate import run_stage
 
 

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent.arrangement import (
     arrangement_checks,
     cluster_check,
@@ -13,7 +14,6 @@ from flexlift.ascent.arrangement import (
 )
 from flexlift.errors import InputError
 from flexlift.loads.liftplan import plan_lift
-from flexlift.scenario import load_scenario
 from flexlift.structure.hull import hull_from_scenario
 
 TRAWLER = Path(__file__).parent / "data" / "trawler.yaml"

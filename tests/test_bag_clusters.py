@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.clusters import find_clusters
 from flexlift.ascent.loop import Ascent
 from flexlift.ascent.plant import coupled_plant
 from flexlift.control.build import controller_for, fuzzy_maps
-from flexlift.scenario import load_scenario
 
 SCENARIO = Path(__file__).resolve().parents[1] / "benchmarks" / "bags_tanker.yaml"
 #: the ascent up to here, before the bags hover at the target: after that the controllers'

@@ -7,10 +7,10 @@ import numba
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import kernel
 from flexlift.ascent.loop import Ascent
 from flexlift.ascent.plant import coupled_plant, layout
-from flexlift.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")

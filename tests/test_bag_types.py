@@ -1,17 +1,18 @@
 """Each bag type's physics in the one compiled loop, and broaching at the surface
 (docs/theory/gas.md#bag-types, docs/theory/gas.md#surface).
 
-The plant and loop tests use the published incident's flange (tests/data/flange_incident.yaml:
+The plant and loop tests use the published incident's flange (the shipped field case
+``field-imca-flange``, docs/validation/imca-flange.md:
 a 0.6 t flange in 19 m of water under one 0.5 t parachute bag 25 % over its rating), changing
 only the bag's type where a test needs another.
 """
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import kernel, simulate
 from flexlift.ascent.loop import Ascent
 from flexlift.ascent.plant import coupled_plant
@@ -24,10 +25,8 @@ from flexlift.ascent.records import (
 from flexlift.ascent.state import RET_DONE
 from flexlift.constants import R_GAS
 from flexlift.physics.surface import volume_from_top, waterline_volume
-from flexlift.scenario import load_scenario
 
-INCIDENT = Path(__file__).parent / "data" / "flange_incident.yaml"
-SC = load_scenario(INCIDENT)
+SC = load_scenario("field-imca-flange")
 ENV = SC.environment
 RHO_G = ENV.seawater_density_kg_m3 * ENV.gravity_m_s2
 RT = R_GAS * ENV.sea_temperature_K

@@ -329,7 +329,7 @@ def test_many_bags_are_listed_by_lift_point_on_the_page_and_every_bag_in_the_csv
     21 bags at 9 points); the CSV keeps a row per bag; the totals agree."""
     from pathlib import Path
 
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
     from flexlift.stages.loads import MAX_BAG_ROWS, bag_table, run_stage
 
     trawler = load_scenario(Path(__file__).parent / "data" / "trawler.yaml")

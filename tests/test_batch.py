@@ -4,10 +4,10 @@ numbers of the same runs one by one, to the last bit."""
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.batch import run_batch
 from flexlift.ascent.loop import prepare
-from flexlift.scenario import load_scenario
 from flexlift.scenario.schema import parse_scenario
 
 TRAWLER = "tests/data/trawler.yaml"

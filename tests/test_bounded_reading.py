@@ -287,7 +287,7 @@ def test_the_copy_into_an_output_folder_and_the_checksum_are_bounded(tmp_path, b
 
 # --------------------------------------------------------------------------- paths
 def test_a_relative_fis_that_loops_in_a_scenario_is_one_line(tmp_path, capsys):
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
 
     _loop(tmp_path)
     s = load_scenario(_scenario(tmp_path, "a.fis"))  # Path.resolve raised RuntimeError here
@@ -299,7 +299,7 @@ def test_a_relative_fis_that_loops_in_a_scenario_is_one_line(tmp_path, capsys):
 
 
 def test_a_link_named_fis_keeps_its_name_in_a_scenario(tmp_path):
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
 
     _zero_link(tmp_path)  # resolved, it would be '/dev/zero': "not a .fis file"
     s = load_scenario(_scenario(tmp_path, "zero.fis"))

@@ -67,7 +67,7 @@ CASE_A = {"gas.fill_rate_max_m3_s": 0.45, "gas.purge_rate_max_m3_s": 2.3,
 
 _FRESH = """
 import json, sys
-from flexlift.scenario import load_scenario
+from flexlift import load_scenario
 from flexlift.sweep.worker import Task, run_case
 changes = json.loads(sys.argv[1])
 record, _ = run_case(Task(1, load_scenario("tanker"), changes, ("coordinated",), False))
@@ -87,7 +87,7 @@ def test_a_case_after_another_is_the_case_in_a_fresh_process():
     import subprocess
     import sys
 
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
     from flexlift.sweep.worker import Task, run_case
 
     base = load_scenario("tanker")
@@ -102,9 +102,9 @@ def test_a_case_after_another_is_the_case_in_a_fresh_process():
 
 
 def test_the_strength_grid_is_shared_by_plants_of_the_same_hull_and_bags():
+    from flexlift import load_scenario
     from flexlift.ascent import strength as S
     from flexlift.ascent.plant import coupled_plant
-    from flexlift.scenario import load_scenario
 
     base = load_scenario("tanker")
     a = coupled_plant(base.with_changes(**CASE_A))
@@ -129,10 +129,10 @@ def test_the_strength_grid_is_shared_by_plants_of_the_same_hull_and_bags():
 def test_all_cluster_keys_at_once_are_each_bags_key(mode):
     """The 73-bag plan (8 alike at each lift point), the pipeline's internal bags and the
     tanker: the keys built at once are each bag's :func:`cluster_key`, byte for byte."""
+    from flexlift import load_scenario
     from flexlift.ascent.clusters import cluster_key, cluster_keys
     from flexlift.ascent.plant import coupled_plant
     from flexlift.control.build import controller_for, fuzzy_maps
-    from flexlift.scenario import load_scenario
 
     fifty = load_scenario(str(BAGS)).with_changes(**{"lift.catalogue_bag.lift_t": 50.0})
     for sc in (fifty, load_scenario("pipeline"), load_scenario("tanker")):
@@ -183,9 +183,9 @@ def test_a_summary_only_case_is_the_full_cases_summary(name, mode):
     paper's plant."""
     import json
 
+    from flexlift import load_scenario
     from flexlift.ascent import simulate
     from flexlift.ascent.result import Frame
-    from flexlift.scenario import load_scenario
     from flexlift.sweep.worker import _one_mode
 
     base, changes = SUMMARY_CASES[name]

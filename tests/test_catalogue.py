@@ -7,9 +7,10 @@ import sys
 import pytest
 
 from flexlift import constants as C
+from flexlift import load_scenario
 from flexlift.errors import InputError
 from flexlift.loads.liftplan import plan_lift
-from flexlift.scenario import catalogue, load_scenario
+from flexlift.scenario import catalogue
 from flexlift.structure.hull import hull_from_scenario
 
 

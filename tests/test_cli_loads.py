@@ -198,8 +198,8 @@ def test_report_puts_the_papers_table_in_the_appendix(tanker):
     the appendix at the end, labelled as the paper's, with its closing values."""
     from pathlib import Path
 
+    from flexlift import load_scenario
     from flexlift.output.report import render_report
-    from flexlift.scenario import load_scenario
 
     html = render_report(tanker, [run_stage(tanker)])
     loads, appendix = html.index('id="loads"'), html.index('id="appendix"')

@@ -37,7 +37,7 @@ def test_simulate_writes_files(tmp_path, capsys):
 
 
 def test_run_stage_and_compare(tmp_path):
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
     from flexlift.stages.simulate import compare_stage, run_stage
 
     sc = load_scenario("tanker")

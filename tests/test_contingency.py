@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario
 from flexlift.sweep.contingency.cases import check_kinds
 from flexlift.sweep.contingency.margin import CAP, MAX_RUNS, Bisection, bisect_margin
 from flexlift.sweep.contingency.run import run_contingency

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario
 from flexlift.sweep.contingency.phases import find_phases, parse_phases
 
 SC = load_scenario("tanker")

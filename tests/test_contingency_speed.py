@@ -8,7 +8,7 @@ import threading
 
 import numpy as np
 
-from flexlift.scenario import load_scenario
+from flexlift import load_scenario
 from flexlift.sweep.contingency import run as R
 from flexlift.sweep.contingency.answer import TRACES, warm_plant
 from flexlift.sweep.executors import Serial

@@ -12,11 +12,11 @@ import math
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent.plant import coupled_plant
 from flexlift.control.build import controller_for, fuzzy_maps
 from flexlift.control.controller import sample
 from flexlift.control.reference import trapezoid
-from flexlift.scenario import load_scenario
 
 SC = load_scenario("tanker")
 CTL = SC.control

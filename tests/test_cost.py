@@ -14,9 +14,10 @@ import pytest
 import yaml
 
 import flexlift
+from flexlift import load_scenario
 from flexlift.errors import InputError
 from flexlift.scenario import cost as C
-from flexlift.scenario import load_scenario, parse_scenario
+from flexlift.scenario import parse_scenario
 from flexlift.scenario.cost import MAX_BAGS, estimate, refusal
 
 SRC = str(Path(flexlift.__file__).resolve().parents[1])

@@ -1,15 +1,15 @@
 """A user's hull without a bag choice gets the largest standard bag <= 50 t whose clusters fit
-(scenario/defaults.py, loads/clusters.py)."""
+(scenario/defaults.py, loads/clusters.py, loads/scenario.py)."""
 
 import argparse
 import math
 
 import yaml
 
+from flexlift import load_scenario
 from flexlift.cli._common import scenario_from
-from flexlift.loads import clusters
+from flexlift.loads import scenario as loading
 from flexlift.loads.clusters import cluster_faults, default_bag
-from flexlift.scenario import load_scenario
 from flexlift.scenario.defaults import assumed_summary
 from flexlift.scenario.schema import parse_scenario
 
@@ -68,7 +68,7 @@ def test_the_command_line_chooses_it(tmp_path, monkeypatch):
     assert s.lift.catalogue_bag.model.startswith("open_parachute_")
     assert s.lift.catalogue_bag.lift_t <= 50.0
     # the command line's scenario is the chooser's, with the real lift plan
-    monkeypatch.setattr(clusters, "default_bag", lambda sc, plan_of: ("chosen", plan_of(sc)))
+    monkeypatch.setattr(loading, "default_bag", lambda sc, plan_of: ("chosen", plan_of(sc)))
     chosen, plan = scenario_from(argparse.Namespace(scenario=str(f)))
     assert chosen == "chosen" and plan.bag_count == math.ceil(
         1.3 * 800.0 * (1 - 1025 / 7850) / 50.0)
@@ -80,8 +80,8 @@ def test_a_sweeps_base_gets_it_too(tmp_path, monkeypatch):
     f = tmp_path / "barge.yaml"
     f.write_text(yaml.safe_dump(HULL))
     seen = []
-    real = clusters.default_bag
-    monkeypatch.setattr(clusters, "default_bag",
+    real = loading.default_bag
+    monkeypatch.setattr(loading, "default_bag",
                         lambda sc, plan_of: seen.append(sc.name) or real(sc, plan_of))
     spec = parse_spec({"base": str(f), "control": ["coordinated"],
                        "grid": {"seabed.breakout_time_s": [30, 60]}})
@@ -109,3 +109,16 @@ def test_no_size_fits_and_the_small_ones_are_too_many(tmp_path):
     f.write_text(yaml.safe_dump({**HULL, "hull": {**HULL["hull"], "length_m": 30.0,
                                                    "breadth_m": 3.0}}))
     assert load_scenario(f).lift.catalogue_bag.model == "open_parachute_50t"
+
+
+def test_the_scenario_floor_reads_the_file_as_written(tmp_path):
+    """No up-call: the scenario floor's reader leaves the first size tried, marked derived;
+    the loads floor's load_scenario chooses (the barge: 35 t, 50 t bags crowd it)."""
+    from flexlift.scenario import read_scenario
+
+    f = tmp_path / "barge.yaml"
+    f.write_text(yaml.safe_dump(HULL))
+    written = read_scenario(f)
+    assert written.lift.catalogue_bag.model == "open_parachute_50t"
+    assert written.defaulted["lift.catalogue_bag"] == "derived"
+    assert load_scenario(f).lift.catalogue_bag.model == "open_parachute_35t"

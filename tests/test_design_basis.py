@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from flexlift import load_scenario
 from flexlift.output.report import render_report
 from flexlift.output.stage import StageOutput
-from flexlift.scenario import load_scenario
 from flexlift.scenario.basis import design_basis, in_air_daf
 from flexlift.stages.run import summary_of
 

@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent.plant import coupled_plant, wet_beam
 from flexlift.control.build import bag_pulls
 from flexlift.loads.design import paper_case
 from flexlift.loads.liftplan import plan_lift
 from flexlift.physics.seabed import holding_shape
-from flexlift.scenario import load_scenario
 from flexlift.stages.loads import design
 from flexlift.structure.hull import hull_from_scenario
 

@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.arrangement import dump_valve_check
 from flexlift.ascent.plant import coupled_plant
 from flexlift.control.profile import valve_profile
-from flexlift.scenario import load_scenario
 from flexlift.scenario.basis import design_basis
 from flexlift.scenario.valves import external_valve
 from flexlift.sweep.contingency.margin import scale_changes

@@ -152,9 +152,9 @@ def test_the_warm_check_finds_the_loop_numba_wrote(tmp_path, monkeypatch):
     """cache_is_warm() names the loop's real entry point: after one ascent it is True (a
     renamed entry point would leave it False for ever, and the first-run note on every run)."""
     import flexlift._jit as jit_module
+    from flexlift import load_scenario
     from flexlift._jit import cache_is_warm
     from flexlift.ascent import simulate
-    from flexlift.scenario import load_scenario
 
     simulate(load_scenario("tanker"), duration=1.0)
     assert cache_is_warm()
@@ -165,7 +165,7 @@ def test_the_warm_check_finds_the_loop_numba_wrote(tmp_path, monkeypatch):
 _INTERPRETED = '''
 import json, sys
 import numpy as np
-from flexlift.scenario import load_scenario
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 ds = simulate(load_scenario("tanker"), duration=20.0).dataset
 print(json.dumps({v: np.asarray(ds[v].values, dtype=float).ravel().tolist()

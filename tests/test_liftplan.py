@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from flexlift import constants as C
+from flexlift import load_scenario
 from flexlift.errors import InputError
 from flexlift.loads.liftplan import bag_count, plan_lift
-from flexlift.scenario import load_scenario
 from flexlift.structure.hull import hull_from_scenario
 from flexlift.structure.modes import compute_modes, zero_crossings
 

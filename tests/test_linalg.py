@@ -28,9 +28,9 @@ def test_the_transposed_pair_is_two_products_to_the_bit(m, n):
 
 @pytest.mark.parametrize("kind", ["coupled", "paper"])
 def test_the_strips_transposed_shape_is_their_shape(kind):
+    from flexlift import load_scenario
     from flexlift.ascent.paper import paper_plant
     from flexlift.ascent.plant import coupled_plant
-    from flexlift.scenario import load_scenario
 
     sc = load_scenario("tanker")
     strips = (coupled_plant if kind == "coupled" else paper_plant)(sc).records.strips

@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
+from flexlift import load_scenario
 from flexlift.output.checktext import EXPLAIN, explain_check
 from flexlift.output.report import render_report
 from flexlift.output.stage import StageOutput
-from flexlift.scenario import load_scenario
 from flexlift.stages import fuzzy, simulate
 
 FPEAKS = Path(__file__).parent / "data" / "fis" / "matlab" / "fpeaks.fis"

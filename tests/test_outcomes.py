@@ -11,11 +11,11 @@ import logging
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.checks import duration_check
 from flexlift.ascent.plant import coupled_plant
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario
 
 #: a short ascent (40 m, quick breakout), as in test_simulate
 QUICK = {"control.target_height_m": 40.0, "seabed.breakout_time_s": 100.0,

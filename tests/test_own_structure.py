@@ -4,10 +4,10 @@ tanker default is required, derived by a named rule, or assumed and listed."""
 import pytest
 
 from flexlift import constants as C
+from flexlift import load_scenario
 from flexlift.cli import main
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario
-from flexlift.scenario.defaults import E_STEEL, POLICY
+from flexlift.scenario.defaults import E_STEEL, LAW_OF, POLICY
 from flexlift.scenario.schema import parse_scenario
 from flexlift.structure.hull import hull_from_scenario
 
@@ -102,7 +102,8 @@ def test_the_built_in_scenarios_assume_nothing():
 def test_every_assumed_value_is_listed_with_its_value_and_reason():
     s = parse_scenario(TRAWLER)
     assumed = {k for k, how in s.defaulted.items() if how == "assumed"}
-    expected = {k for k, (p, _) in POLICY.items() if p == "assumed"}
+    expected = {k for k, (p, _) in POLICY.items()
+                if p == "assumed" and LAW_OF.get(k, "timer") == "timer"}  # the default law
     assert assumed == expected
     notes = " ".join(s.notes())
     assert "hull.allowable_stress_MPa = 175 (assumed:" in notes
@@ -177,3 +178,16 @@ def test_a_hostile_defaulted_is_one_line_not_a_crash(defaulted):
     with pytest.raises(InputError) as e:
         parse_scenario({**TRAWLER, "defaulted": defaulted})
     assert "defaulted" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_the_soil_laws_inputs_are_assumed_only_under_that_law():
+    """A user's hull on the soil breakout law lists the soil's values it was not given as
+    assumed, and not the timer's breakout time it does not read; on the timer, the reverse."""
+    soil = parse_scenario({**TRAWLER, "seabed": {"breakout_law": "soil", "embedment_m": 2.0}})
+    assert soil.defaulted["seabed.shear_strength_kPa"] == "assumed"
+    assert soil.defaulted["seabed.consolidation_coefficient_m2_s"] == "assumed"
+    assert "seabed.embedment_m" not in soil.defaulted  # given
+    assert "seabed.breakout_time_s" not in soil.defaulted
+    timer = parse_scenario(TRAWLER)
+    assert timer.defaulted["seabed.breakout_time_s"] == "assumed"
+    assert "seabed.shear_strength_kPa" not in timer.defaulted

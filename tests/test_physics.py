@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from flexlift.ascent.records import Seabed
 from flexlift.constants import P_ATM, R_GAS, RHO_SEAWATER, T_SEA
 from flexlift.physics import gas, hydro, seabed
 
@@ -77,28 +78,39 @@ def test_gas_rates_buoyancy_free_air_and_expansion():
 H0 = 8.0e6
 
 
+def timer(breakout_time=400.0):
+    """A seabed record of the timer law (the fields ``holding_rate`` reads)."""
+    return Seabed(ng=1, hold_force=np.zeros((1, 1)), H0=np.array([H0]),
+                  group_weight=np.zeros(1), breakout_time=breakout_time, release_time=30.0,
+                  liftoff_clearance=0.1, law=seabed.LAW_TIMER, consolidation_time=1.0)
+
+
+def rate(U, T_b=400.0):
+    """The timer law's dH/dt under U (it does not read the hold left)."""
+    return seabed.holding_rate(U, H0, H0, timer(T_b))
+
+
 @pytest.mark.parametrize("frac", [0.1, 0.25, 0.5, 0.9])
 def test_holding_decay_below_H0_gives_the_breakout_time(frac):
     U = frac * H0
-    assert seabed.holding_rate(U, H0, 400.0) == pytest.approx(-(H0 / 400.0) * frac)
+    assert rate(U) == pytest.approx(-(H0 / 400.0) * frac)
     expected = 400.0 * (1.0 / frac - 1.0)  # T_b (H0 / U - 1)
     assert seabed.separation_time(U, H0, 400.0) == pytest.approx(expected)
     H, t, dt = H0, 0.0, 0.05
     while U <= H:
-        H += dt * seabed.holding_rate(U, H0, 400.0)
+        H += dt * rate(U)
         t += dt
     assert t == pytest.approx(expected, abs=0.1)
 
 
 def test_holding_decay_at_and_above_H0_and_without_pull():
-    assert seabed.holding_rate(2 * H0, H0, 400.0) == pytest.approx(-H0 / 400.0)
-    assert seabed.holding_rate(H0, H0, 400.0) == pytest.approx(-H0 / 400.0)
-    assert seabed.holding_rate(-1e6, H0, 400.0) == 0.0
-    assert seabed.holding_rate(0.0, H0, 400.0) == 0.0
+    assert rate(2 * H0) == pytest.approx(-H0 / 400.0)
+    assert rate(H0) == pytest.approx(-H0 / 400.0)
+    assert rate(-1e6) == 0.0
+    assert rate(0.0) == 0.0
     assert seabed.separation_time(1.5 * H0, H0, 400.0) == 0.0
     assert seabed.separation_time(0.0, H0, 400.0) == math.inf
-    np.testing.assert_allclose(seabed.holding_rate(np.array([0.5, 2.0]) * H0, H0, 400.0),
-                               [-H0 / 800.0, -H0 / 400.0])
+    assert [rate(0.5 * H0), rate(2.0 * H0)] == pytest.approx([-H0 / 800.0, -H0 / 400.0])
 
 
 def test_release_is_the_exact_exponential():

@@ -128,7 +128,8 @@ def test_hull_number_contradicting_the_pipe(tmp_path, capsys):
 
 
 def test_builtin_pipeline_scenario():
-    from flexlift.scenario import builtin_names, load_scenario
+    from flexlift import load_scenario
+    from flexlift.scenario import builtin_names
 
     assert "pipeline" in builtin_names()
     s = load_scenario("pipeline")
@@ -139,7 +140,7 @@ def test_builtin_pipeline_scenario():
 
 def test_with_changes_on_a_pipe_derives_the_hull_anew():
     """Changing a pipe key (as a sweep or a mesh study does) re-derives the hull and the bags."""
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
 
     sc = load_scenario("pipeline")
     fine = sc.with_changes(**{"pipe.elements": 2000})

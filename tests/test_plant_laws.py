@@ -20,6 +20,7 @@ import numba
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift._struct import as_struct
 from flexlift.ascent import kernel, simulate
 from flexlift.ascent.loop import Ascent
@@ -33,7 +34,6 @@ from flexlift.ascent.paper import paper_plant
 from flexlift.ascent.plant import coupled_plant
 from flexlift.ascent.state import EV_SEPARATION, RET_DONE
 from flexlift.constants import R_GAS
-from flexlift.scenario import load_scenario
 from flexlift.structure.hull import hull_from_scenario
 from flexlift.structure.modes import compute_modes
 

@@ -54,8 +54,8 @@ def test_python_api_example_runs(capsys):
 
 
 def test_getting_started_wreck_is_valid_and_sized_as_the_page_says(tmp_path):
+    from flexlift import load_scenario
     from flexlift.loads.liftplan import plan_lift
-    from flexlift.scenario import load_scenario
     from flexlift.structure.hull import hull_from_scenario
 
     page = (ROOT / "docs" / "getting-started.md").read_text()

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import strength as S
 from flexlift.ascent.plant import coupled_plant
-from flexlift.scenario import load_scenario
 
 TRAWLER = Path(__file__).parent / "data" / "trawler.yaml"
 

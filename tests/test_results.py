@@ -3,9 +3,9 @@ import json
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.output.results import BAG_VARS, CRITERIA, HULL_VARS, load_netcdf, save_netcdf, to_csv
-from flexlift.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")

@@ -101,7 +101,7 @@ def test_summary_matches_the_stages_json(tanker_run, capsys):
 
 
 def test_scenario_copy_repeats_the_run(tanker_run, tanker):
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
 
     again = load_scenario(tanker_run / "scenario.yaml")
     assert again.checksum() == tanker.checksum()

@@ -1,7 +1,8 @@
 import pytest
 
+from flexlift import load_scenario
 from flexlift.errors import InputError
-from flexlift.scenario import builtin_names, load_scenario, parse_scenario
+from flexlift.scenario import builtin_names, parse_scenario
 
 
 def test_tanker_is_builtin_and_matches_spec(tanker):

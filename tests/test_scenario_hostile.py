@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 from pydantic import BaseModel
 
+from flexlift import load_scenario
 from flexlift.cli import main
 from flexlift.errors import InputError
-from flexlift.scenario import Scenario, load_scenario, parse_scenario
+from flexlift.scenario import Scenario, parse_scenario
 
 #: the documented limits of a scenario file (docs/reference/scenario.md)
 MAX_BYTES = 1_000_000

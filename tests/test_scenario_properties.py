@@ -24,9 +24,10 @@ from hypothesis import strategies as st
 from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
+from flexlift import load_scenario
 from flexlift.cli import main
 from flexlift.errors import InputError
-from flexlift.scenario import Scenario, load_scenario, parse_scenario
+from flexlift.scenario import Scenario, parse_scenario
 
 #: longest message after the "source: " prefix
 LIMIT = 300

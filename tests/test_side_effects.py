@@ -39,7 +39,7 @@ def state():
             "matplotlib_backend": matplotlib.get_backend()}
 
 before = state()
-from flexlift.scenario import load_scenario
+from flexlift import load_scenario
 from flexlift.stages.run import run_all
 
 out = Path(sys.argv[1])

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.errors import InputError, SimulationError
-from flexlift.scenario import load_scenario
 
 #: a short ascent (40 m, quick breakout) for the checks that need several runs
 QUICK = {
@@ -268,8 +268,8 @@ def test_the_adapted_neutral_volume_removes_the_steady_error(tanker):
 def test_the_progress_bar_moves_evenly_to_the_end():
     """The fraction follows the plan's expected run (separation, rise, hold), so the tanker's
     bar does not sit at two thirds and jump to 100 % when the target has been held."""
+    from flexlift import load_scenario
     from flexlift.ascent import simulate
-    from flexlift.scenario import load_scenario
 
     seen = []
     simulate(load_scenario("tanker"), control="coordinated", progress=seen.append)

@@ -4,6 +4,7 @@ controllers' start times, and the built-in pipeline peeled off the seabed stage 
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.checks import breakout_check
 from flexlift.ascent.mechanics import contact_matrices, update_contact_matrices
@@ -12,7 +13,6 @@ from flexlift.control.build import controller_for, fuzzy_maps
 from flexlift.control.controller import sample
 from flexlift.control.sequence import stage_groups, start_times
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario
 
 
 @pytest.fixture(scope="module")

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.loop import HELD_STEP_S, held_steps
 from flexlift.ascent.state import Settings
-from flexlift.scenario import load_scenario
 
 TRAWLER = Path(__file__).parent / "data" / "trawler.yaml"
 CASES = {"tanker": lambda: load_scenario("tanker"),

@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent.checks import balance_check, weight_centre
 from flexlift.ascent.plant import coupled_plant
 from flexlift.cli import main
 from flexlift.loads.statics import scenario_statics, summary
-from flexlift.scenario import load_scenario
 
 
 def test_resting_tanker_contact_length_is_its_length(tanker, capsys):

@@ -5,9 +5,9 @@ the fill rate x time up to the bag's true capacity."""
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.ascent.plant import coupled_plant
-from flexlift.scenario import load_scenario
 
 SC = load_scenario("tanker")
 ENV = SC.environment

@@ -4,8 +4,8 @@ docs/theory/gas.md#supply)."""
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
-from flexlift.scenario import load_scenario
 
 FAD_M3_MIN = 10.0  # far below what seven bags at 350 m ask for at 0.5 m3/s each
 

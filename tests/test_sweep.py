@@ -124,7 +124,7 @@ def test_reused_plants_are_the_plants_a_fresh_build_gives(tanker):
     _same_records(plants.plant_for(tanker, "paper"), paper_plant(tanker))
     assert plants.stats()["plants"]["hits"] >= before + 3  # {} twice, current, pull
     # a plant of a pipeline (read from keys of its pipe section), then a tanker (no pipe)
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
 
     line = load_scenario("pipeline").with_changes(**{"pipe.elements": 40})
     memo = plants.ReadMemo()
@@ -430,8 +430,8 @@ def test_outputs_netcdf_summary_report_and_exact_reruns(tmp_path, capsys):
                  "flexlift run rerun/"):
         assert text in html, text
     # each worst case reruns exactly: the same scenario, the same numbers
+    from flexlift import load_scenario
     from flexlift.ascent import simulate
-    from flexlift.scenario import load_scenario
 
     for w in summary["worst"]["coordinated"]:
         path = out / "rerun" / f"{w['name']}.yaml"
@@ -448,9 +448,9 @@ def test_outputs_netcdf_summary_report_and_exact_reruns(tmp_path, capsys):
 
 
 def test_a_users_fis_controller_is_found_beside_the_spec(tmp_path, tanker):
+    from flexlift import load_scenario
     from flexlift.fuzzy.fis import to_fis_text
     from flexlift.fuzzy.rulebase import supervisor_fis_from
-    from flexlift.scenario import load_scenario
 
     fis = tmp_path / "ctl" / "mine.fis"
     fis.parent.mkdir()

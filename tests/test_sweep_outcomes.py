@@ -112,7 +112,7 @@ def test_a_sweep_whose_short_runs_end_incomplete_counts_them_apart(tmp_path):
 def test_invalid_values_numerics_and_memory_are_data(monkeypatch):
     """The three failures a case can have are recorded; the sweep goes on."""
     import flexlift.sweep.plants as plants
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
     from flexlift.sweep.worker import Task, run_case
 
     base = load_scenario("tanker").with_changes(**SHORT)
@@ -134,7 +134,7 @@ def test_invalid_values_numerics_and_memory_are_data(monkeypatch):
 
 def test_a_programming_error_in_a_case_is_not_a_result(monkeypatch):
     import flexlift.sweep.plants as plants
-    from flexlift.scenario import load_scenario
+    from flexlift import load_scenario
     from flexlift.sweep.worker import Task, run_case
 
     def bug(*a, **k):

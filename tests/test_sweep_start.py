@@ -121,7 +121,7 @@ def test_the_fork_server_imports_no_dask_and_freezes_its_objects():
             "print(int(WARM), *(int(m in sys.modules) for m in ('dask', 'xarray', 'pandas')),\n"
             "      int(gc.get_freeze_count() > 10000))\n"
             "gc.unfreeze()\n"
-            "from flexlift.scenario import load_scenario\n"
+            "from flexlift import load_scenario\n"
             "from flexlift.sweep import worker\n"
             "worker.own_process()\n"
             "task = worker.Task(0, load_scenario('tanker'), {}, ('coordinated',), True)\n"

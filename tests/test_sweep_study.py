@@ -92,6 +92,26 @@ def test_the_salvage_study_pins_the_plan_and_draws_each_bags_factor():
         assert [b.lift_t for b in sc.lift.bags] == pytest.approx([517.0] * 7)
 
 
+def test_under_the_soil_law_the_study_varies_the_soils_keys():
+    """A soil-law base (docs/theory/breakout-soil.md): u scales s_u (H0 = u x the nominal
+    soil force, exactly) and the time's law is on c_v, not on the timer's T_b it ignores."""
+    from flexlift.ascent.plant import coupled_plant
+
+    spec = parse_spec({"base": "field-grieg-barge", "control": "open-loop", "study": "salvage",
+                       "monte_carlo": {"samples": 4, "seed": 2}})
+    assert "seabed.breakout_time_s" not in spec.distributions
+    cv = spec.base.seabed.consolidation_coefficient_m2_s
+    d = spec.distributions["seabed.consolidation_coefficient_m2_s"]
+    assert (d.kind, d.low, d.high) == ("loguniform", 0.5 * cv, 2.0 * cv)
+    assert "R-755" in dict(spec.study.sources)["seabed.consolidation_coefficient_m2_s"]
+    h0 = float(coupled_plant(spec.base).seabed.H0.sum())
+    for c in make_cases(spec)[:2]:
+        sc = case_scenario(spec, c)
+        assert sc.lift.breakout_factor == spec.base.lift.breakout_factor
+        assert float(coupled_plant(sc).seabed.H0.sum()) == pytest.approx(c.values[SOIL] * h0,
+                                                                          rel=1e-12)
+
+
 def test_the_user_narrows_and_adds_ranges():
     spec = parse_spec(study(vary={SOIL: {"dist": "uniform", "low": 0.9, "high": 1.1},
                                   "lift.bags.capacity_factor": {"dist": "uniform", "low": 1.0,

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
-from flexlift.scenario import load_scenario
 from flexlift.scenario.defaults import POLICY
 from flexlift.scenario.schema import parse_scenario
 from flexlift.sweep.aggregate import limits_of

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 import yaml
 
+from flexlift import load_scenario
 from flexlift.ascent import simulate
 from flexlift.cli import main
 from flexlift.control.build import fill_map_of, fuzzy_maps
 from flexlift.errors import InputError
 from flexlift.fuzzy.fis import to_fis_text
 from flexlift.fuzzy.rulebase import fill_fis, supervisor_fis_from
-from flexlift.scenario import load_scenario
 
 DURATION = 2300.0  # past the separation at ~1880 s: a few hundred seconds of controlled ascent
 

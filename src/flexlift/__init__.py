@@ -15,22 +15,25 @@ holds the same list and checks every import against it):
 marker) is the bottom floor every layer may use; the top-level helpers (``constants``,
 ``errors``, ``_jit``, ``_struct``, ``_threads``) likewise.
 
-One function joins the floors the other way: :func:`loaded`, the scenario as every way in
-loads it (the library's ``load_scenario``, the command line, a sweep's base), chooses the
-default bag of a user's hull on its lift plan (``flexlift.loads.clusters``), which the
-scenario floor cannot compute.
+``flexlift.load_scenario`` (:func:`flexlift.loads.scenario.load_scenario`) loads a scenario
+as every way in does: the file read on the scenario floor, then a user's hull given its
+default bag on its lift plan, on the loads floor.
 
 Units are SI throughout (m, s, kg, N, Pa, rad); tonnes, degrees and bar appear only in
 scenario files and reports.
 """
 
-__all__ = ["__version__", "loaded"]
+__all__ = ["__version__", "load_scenario"]
 
 
 def __getattr__(name: str):
     """``__version__``, looked up when first asked for: importing :mod:`importlib.metadata`
     takes 40 ms, paid before a sweep can start its worker pool (the command line imports this
     package first)."""
+    if name == "load_scenario":  # looked up when first asked for, as the version is
+        from flexlift.loads.scenario import load_scenario
+
+        return load_scenario
     if name != "__version__":
         raise AttributeError(f"module 'flexlift' has no attribute {name!r}")
     from importlib.metadata import PackageNotFoundError, version
@@ -41,14 +44,3 @@ def __getattr__(name: str):
         value = "0+unknown"
     globals()["__version__"] = value
     return value
-
-
-def loaded(scenario):
-    """``scenario`` as every way in loads it: a user's hull without a bag choice given the
-    largest standard bag whose clusters fit (:func:`flexlift.loads.clusters.with_default_bag`);
-    any other scenario as it is. :func:`flexlift.scenario.load_scenario` returns this."""
-    if (scenario.defaulted or {}).get("lift.catalogue_bag") != "derived":
-        return scenario
-    from flexlift.loads.clusters import with_default_bag
-
-    return with_default_bag(scenario)

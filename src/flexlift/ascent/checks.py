@@ -145,8 +145,12 @@ def _separations(scenario, plant):
         mine = plant.bags.group[ext] == k
         fill = float(held[mine].sum()) / max(mine.sum() * q_in, 1e-12)
         fills.append(fill)
-        times.append(float(start[mine].max(initial=0.0)) + fill + seabed.separation_time(
-            float(held[mine].sum()) * plant.bags.rho_g, float(plant.seabed.H0[k]), T_b))
+        pull = float(held[mine].sum()) * plant.bags.rho_g
+        times.append(float(start[mine].max(initial=0.0)) + fill + (
+            seabed.soil_separation_time(pull, float(plant.seabed.H0[k]),
+                                        plant.seabed.consolidation_time)
+            if plant.seabed.law == seabed.LAW_SOIL
+            else seabed.separation_time(pull, float(plant.seabed.H0[k]), T_b)))
     return V_pull, held, times, fills
 
 

@@ -745,8 +745,8 @@ def holding(t, plant, state, switches, settings, recorder, noise):
         else:
             # the rate at the start of the step (its uplift, kept in state.gap + state.H_old),
             # stepped by Adams-Bashforth 2 with the previous step's
-            rate = holding_rate(state.gap[g] + state.H_old[g], plant.seabed.H0[g],
-                                plant.seabed.breakout_time)
+            rate = holding_rate(state.gap[g] + state.H_old[g], state.H_old[g],
+                                plant.seabed.H0[g], plant.seabed)
             prev = state.H_rate[g]
             state.H[g] += dt * (1.5 * rate - 0.5 * prev) if not math.isnan(prev) else dt * rate
             state.H_rate[g] = rate

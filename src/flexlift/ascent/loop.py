@@ -77,7 +77,7 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
     Parameters
     ----------
     scenario : Scenario
-        The lift (:func:`flexlift.scenario.load_scenario`).
+        The lift (:func:`flexlift.load_scenario`).
     control : str, optional
         Control mode (default ``scenario.control.mode``): ``decentralized``, ``coordinated``,
         ``paper`` (decentralized control on the paper's uncoupled plant) or ``open-loop``.
@@ -123,7 +123,7 @@ def simulate(scenario, control: str | None = None, duration: float | None = None
 
     Examples
     --------
-    >>> from flexlift.scenario import load_scenario
+    >>> from flexlift import load_scenario
     >>> from flexlift.ascent import simulate
     >>> result = simulate(load_scenario("tanker"), control="coordinated")
     >>> all(result.criteria.values())

@@ -94,7 +94,8 @@ def paper_plant(scenario, coupled: Plant | None = None) -> Plant:
         gen_strip=eye * (D * trib)[:, None], gen_bag=eye * D[:, None], count=np.ones(ne))
     seabed = Seabed(ng=ne, hold_force=-force.copy(), H0=H0, group_weight=W,
                     breakout_time=psb.breakout_time, release_time=psb.release_time,
-                    liftoff_clearance=psb.liftoff_clearance)
+                    liftoff_clearance=psb.liftoff_clearance, law=psb.law,
+                    consolidation_time=psb.consolidation_time)
     return Plant(kind="paper", names=tuple(P.names[i] for i in ext), external=np.ones(ne, bool),
                  x_point=x.copy(), spans=(None,) * ne, neutral_volume=W / pb.rho_g,
                  strip_x=x.copy(), strip_element=P.hull.element_of(x), modal=modal, strips=strips,

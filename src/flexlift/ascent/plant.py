@@ -442,13 +442,18 @@ def seabed_record(scenario, plan: LiftPlan, nr: int, lay: Layout, hold: Holding)
     """The holding groups: their generalised force, initial hold and wet weight."""
     sb = scenario.seabed
     H0 = (scenario.lift.breakout_factor - 1.0) * plan.wet_weight
+    if sb.breakout_law == "soil":  # docs/theory/breakout-soil.md#force
+        H0 = seabed.soil_breakout_force(scenario.hull.length_m, scenario.hull.breadth_m,
+                                        sb.embedment_m, sb.shear_strength_kPa * 1e3)
     hold_s, sg = hold.strip_hold, hold.strip_group
     return Seabed(
         ng=hold.ng,
         hold_force=-np.stack([lay.strip_gen[:nr] @ (hold_s * (sg == k)) for k in range(hold.ng)],
                              axis=1),
         H0=H0 * hold.frac, group_weight=hold.W_g, breakout_time=sb.breakout_time_s,
-        release_time=sb.release_time_s, liftoff_clearance=LIFTOFF_CLEARANCE)
+        release_time=sb.release_time_s, liftoff_clearance=LIFTOFF_CLEARANCE,
+        law=seabed.LAWS[sb.breakout_law],
+        consolidation_time=sb.drainage_length_m ** 2 / sb.consolidation_coefficient_m2_s)
 
 
 #: the range of ``simulation.retained_flexible_modes: auto``

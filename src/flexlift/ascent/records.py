@@ -212,9 +212,11 @@ class Seabed(NamedTuple):
     hold_force (nr, ng)       -           generalised force per unit H of a group (down)
     H0 (ng,)                  N           initial holding force
     group_weight (ng,)        N           wet weight W_g a group's bags must lift
-    breakout_time             s           T_b
+    breakout_time             s           T_b (the timer law)
     release_time              s           tau_r
     liftoff_clearance         m           the structure is clear of the seabed above this
+    law                       -           the held law: physics.seabed.LAW_TIMER or LAW_SOIL
+    consolidation_time        s           T_c = d^2 / c_v (the soil law)
     ========================= =========== ==================================================
     """
 
@@ -225,6 +227,8 @@ class Seabed(NamedTuple):
     breakout_time: float
     release_time: float
     liftoff_clearance: float
+    law: int
+    consolidation_time: float
 
 
 class PlantRecords(NamedTuple):

@@ -140,7 +140,8 @@ class Result:
                 "gas_initial_free_air_m3", "gas_total_free_air_m3", "gas_vented_free_air_m3",
                 "gas_purged_free_air_m3", "supply_bag_hours", "daf_pull", "daf_pull_bag",
                 "daf_ascent", "daf_ascent_bag", "end_time_s")
-        out = {"control": self.control, "outcome": self.outcome.get("kind"),
+        out = {"control": self.control, "breakout_law": ds.attrs.get("breakout_law", "timer"),
+               "outcome": self.outcome.get("kind"),
                "outcome_cause": self.outcome.get("cause"),
                "needs_more_s": self.outcome.get("needs_s"),
                **{k: h[k] for k in keys}, "arrival_time_s": arr,
@@ -433,7 +434,8 @@ def _attributes(ds, run, events, t, Mmax, Vmax, error) -> None:
                     scenario_checksum=sc.checksum(), control=run.mode, events=json.dumps(events),
                     criteria=json.dumps(crit), reasons=json.dumps(reasons),
                     outcome=json.dumps(outcome.as_dict()), headline=json.dumps(headline), error=error or "",
-                    max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax)
+                    max_ascent_velocity_m_s=vmax, max_pitch_rad=pmax,
+                    breakout_law=sc.seabed.breakout_law)
 
 
 def utilisation_reason(ds, sc) -> str:

@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
+from flexlift.loads.scenario import load_scenario
 from flexlift.output import output_folder
-from flexlift.scenario import Scenario, load_scenario
+from flexlift.scenario import Scenario
 
 
 def add_scenario_arg(p: argparse.ArgumentParser) -> None:
@@ -37,7 +38,7 @@ def add_json_arg(p: argparse.ArgumentParser) -> None:
 def scenario_from(args: argparse.Namespace) -> Scenario:
     """The scenario named on the command line, a user's hull given its default bag
     (loads/clusters.py: the largest standard size whose clusters fit), as the library's
-    :func:`~flexlift.scenario.load_scenario` loads it."""
+    :func:`~flexlift.load_scenario` loads it."""
     scenario = load_scenario(args.scenario)
     check_fault_bags(scenario)
     return scenario

@@ -56,7 +56,7 @@ def _main(args: argparse.Namespace) -> int:
         crit = ", ".join(f"{k} {'pass' if v else 'FAIL'}" for k, v in s["criteria"].items())
         arr = [v for v in s["arrival_time_s"].values() if v is not None]
         sys.stdout.write(
-            f"{s['control']} control: "
+            f"{s['control']} control, {s.get('breakout_law', 'timer')} breakout law: "
             + (f"separation at {s['separation_time_s']} s, " if s["separation_time_s"] is not None
                else "no separation, ")
             + (f"breakout complete at {s['breakout_time_s']} s, "

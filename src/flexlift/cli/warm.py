@@ -36,7 +36,7 @@ def warm(say=None) -> float:
     seconds it took. ``say(line)`` reports progress (default: stderr)."""
     from flexlift.ascent import simulate
     from flexlift.cli.run import DEFAULT_CONTROLS
-    from flexlift.scenario import load_scenario
+    from flexlift.loads.scenario import load_scenario
 
     if say is None:
         def say(line: str) -> None:

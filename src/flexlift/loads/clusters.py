@@ -73,14 +73,3 @@ def default_bag(scenario, plan_of):
         if not cluster_faults(plan.lift_points(), bag.diameter_m, h.breadth_m, h.length_m):
             return choice
     return first
-
-
-def with_default_bag(scenario):
-    """:func:`default_bag` with the lift plan of :func:`flexlift.loads.liftplan.plan_lift`:
-    every way in loads a scenario through it (:func:`flexlift.loaded`, called by
-    :func:`flexlift.scenario.load_scenario`, so the library, the command line and a sweep's
-    base agree)."""
-    from flexlift.loads.liftplan import plan_lift
-    from flexlift.structure.hull import hull_from_scenario
-
-    return default_bag(scenario, lambda s: plan_lift(s, hull_from_scenario(s)))

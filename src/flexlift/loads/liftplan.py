@@ -161,7 +161,7 @@ def plan_lift(scenario, hull: Hull, modes: Modes | None = None) -> LiftPlan:
 
     Examples
     --------
-    >>> from flexlift.scenario import load_scenario
+    >>> from flexlift import load_scenario
     >>> from flexlift.structure.hull import hull_from_scenario
     >>> from flexlift.loads.liftplan import plan_lift
     >>> scenario = load_scenario("tanker")

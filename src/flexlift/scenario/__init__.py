@@ -4,16 +4,17 @@
 - :mod:`.types`: strict, bounded numbers and names; :mod:`.file`: reading an untrusted file;
   :mod:`.messages`: one-line error messages.
 
-``load_scenario("tanker")`` or ``load_scenario("my-wreck.yaml")`` gives a validated
-:class:`Scenario`.
+``read_scenario("tanker")`` or ``read_scenario("my-wreck.yaml")`` gives a validated
+:class:`Scenario` as written; ``flexlift.load_scenario`` (what every way in calls) also
+chooses a user's hull its default bag, on the lift plan (a floor above this one).
 """
 
 from flexlift.scenario.schema import (
     ControlMode,
     Scenario,
     builtin_names,
-    load_scenario,
     parse_scenario,
+    read_scenario,
 )
 
-__all__ = ["ControlMode", "Scenario", "builtin_names", "load_scenario", "parse_scenario"]
+__all__ = ["ControlMode", "Scenario", "builtin_names", "parse_scenario", "read_scenario"]

@@ -81,6 +81,13 @@ POLICY: dict[str, tuple[str, str]] = {
     "seabed.breakout_time_s": ("assumed", "400 s for a full pull to break the suction out "
                                "(soil-dependent: ±100 % per NCEL R-755)"),
     "seabed.release_time_s": ("assumed", "30 s for the suction to release after separation"),
+    # the soil breakout law's inputs (docs/theory/breakout-soil.md), listed only under that law
+    "seabed.shear_strength_kPa": ("assumed", "3 kPa undrained shear strength at the base: very "
+                                  "soft clay or silt"),
+    "seabed.embedment_m": ("assumed", "1 m of the hull's bottom below the mudline"),
+    "seabed.drainage_length_m": ("assumed", "1 m of pore-water path to the hull's base"),
+    "seabed.consolidation_coefficient_m2_s": ("assumed", "5e-5 m2/s, calibrated on the Ehime "
+                                              "Maru's breakout time (one case)"),
     "control.breakout_pull_t": ("assumed", "18 % of the suction H0 held as extra buoyancy "
                                 "until lift-off (the tanker's plan: 150 t of 835 t)"),
     "gas.fill_rate_max_m3_s": ("assumed", "0.5 m3/s of gas per bag at the bag's depth (a "
@@ -109,6 +116,12 @@ POLICY: dict[str, tuple[str, str]] = {
     "control.coordination.pitch_gain_m3_rad": ("assumed", "the coordinated mode's pitch gain, "
                                                "tuned on the paper's tanker"),
 }
+
+
+#: keys read by one breakout law only (seabed.breakout_law): assumed only under that law
+LAW_OF = {"seabed.breakout_time_s": "timer", "seabed.shear_strength_kPa": "soil",
+          "seabed.embedment_m": "soil", "seabed.drainage_length_m": "soil",
+          "seabed.consolidation_coefficient_m2_s": "soil"}
 
 
 def _given(data: dict, dotted: str) -> bool:
@@ -184,8 +197,10 @@ def complete_own_structure(data: dict) -> dict:
         defaulted["limits.pitch_deg"] = "derived"
     fills = {"hull.length_between_perpendiculars_m": None, "lift.internal_bags": 0,
              "seabed.holding_shape": "uniform"}
+    seabed = out.get("seabed")
+    law = seabed.get("breakout_law", "timer") if isinstance(seabed, dict) else "timer"
     for key, (policy, _) in POLICY.items():
-        if any(_given(out, k) for k in key.split("|")):
+        if any(_given(out, k) for k in key.split("|")) or LAW_OF.get(key, law) != law:
             continue
         if key in fills:
             if all(isinstance(out.get(p), dict | None) for p in key.split(".")[:1]):

@@ -9,7 +9,7 @@ from __future__ import annotations
 from functools import lru_cache
 
 from flexlift.scenario.defaults import own_structure, set_in
-from flexlift.scenario.schema import Scenario, load_scenario
+from flexlift.scenario.schema import Scenario, read_scenario
 
 __all__ = ["source", "value_of", "tanker", "generic_defaults"]
 
@@ -17,7 +17,7 @@ __all__ = ["source", "value_of", "tanker", "generic_defaults"]
 @lru_cache(maxsize=1)
 def tanker():
     """The built-in tanker (read only)."""
-    return load_scenario("tanker")
+    return read_scenario("tanker")
 
 
 @lru_cache(maxsize=1)

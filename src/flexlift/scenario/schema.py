@@ -14,7 +14,7 @@ elements, steps x bags), checked for every scenario. Numbers are strict: an inte
 may be given for a real number, but never a boolean or text (``elements: true`` or
 ``length_m: "78"`` are errors, not 1 and 78), and never NaN or infinity.
 
-Load with :func:`load_scenario` (a built-in name such as ``"tanker"`` or a path).
+Read with :func:`read_scenario` (a built-in name such as ``"tanker"`` or a path).
 """
 
 from __future__ import annotations
@@ -304,6 +304,14 @@ class Seabed(_Section):
     release_time_s: real(0.001, MAX_TIME_S) = 30.0  # tau_r: suction release after separation
     contact_stiffness_N_m2: real(1.0e3, 1.0e10) = 5.0e6  # penalty spring per unit length [N/m per m]
     contact_damping_Ns_m2: real(0, 1.0e9) = 2.0e6  # penalty damper per unit length [N s/m per m]
+    # the held law (docs/theory/breakout-soil.md): timer (T_b, H0 from lift.breakout_factor) or
+    # soil (H0 from the soil's strength and embedment, relief by consolidation under the pull)
+    breakout_law: Literal["timer", "soil"] = "timer"
+    shear_strength_kPa: real(0.01, 1000) = 3.0  # soil law: undrained shear strength s_u at the base
+    embedment_m: real(0, 100) = 1.0  # soil law: depth of the hull's bottom below the mudline
+    drainage_length_m: real(0.01, 1000) = 1.0  # soil law: d, the pore water's path to the base
+    # soil law: c_v, an effective coefficient (calibrated, docs/theory/breakout-soil.md#calibration)
+    consolidation_coefficient_m2_s: real(1e-12, 100) = 5.0e-5
 
     @model_validator(mode="after")
     def _check(self) -> Seabed:
@@ -762,8 +770,11 @@ def _resolve_files(scenario: Scenario, folder: Path) -> Scenario:
     return scenario.with_changes(**moved) if moved else scenario
 
 
-def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
-    """Load a built-in scenario by name (default ``tanker``) or a YAML file by path.
+def read_scenario(name_or_path: str | Path | None = None) -> Scenario:
+    """Read a built-in scenario by name (default ``tanker``) or a YAML file by path, as
+    written: a user's hull without a bag choice keeps the first standard size tried, marked
+    ``defaulted["lift.catalogue_bag"] == "derived"``. :func:`flexlift.load_scenario`, what
+    every way in calls, then chooses that bag on the lift plan (a floor above this one).
 
     The file is read defensively (:mod:`flexlift.scenario.file`): a regular UTF-8 file of at
     most 1 MB, one YAML document, no duplicate keys, bounded nesting and aliases; an empty
@@ -778,9 +789,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     Returns
     -------
     Scenario
-        The validated scenario, every default filled in (units in the key names); a user's
-        hull without a bag choice gets the largest standard bag whose clusters fit on it
-        (:func:`flexlift.loaded`, as on the command line and in a sweep's base).
+        The validated scenario, every default filled in (units in the key names).
 
     Raises
     ------
@@ -789,13 +798,13 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
 
     Examples
     --------
-    >>> from flexlift.scenario import load_scenario
-    >>> tanker = load_scenario("tanker")
+    >>> from flexlift.scenario import read_scenario
+    >>> tanker = read_scenario("tanker")
     >>> tanker.hull.length_m, tanker.lift.layout
     (78.02, 'mode_nodes')
     >>> tanker.with_changes(**{"hull.elements": 40}).hull.elements
     40
-    >>> load_scenario("no-such-wreck.yaml")  # doctest: +ELLIPSIS
+    >>> read_scenario("no-such-wreck.yaml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     flexlift.errors.InputError: ...no such file...
@@ -822,7 +831,4 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         data = {**data, "lift": {**lift, "catalogue_file": reading.absolute(
             path.parent / lift["catalogue_file"])}}
     scenario = parse_scenario(data, source=source)
-    scenario = _resolve_files(scenario, path.parent) if reading.exists(path) else scenario
-    import flexlift  # the package root: a user's hull gets its default bag (flexlift.loaded)
-
-    return flexlift.loaded(scenario)
+    return _resolve_files(scenario, path.parent) if reading.exists(path) else scenario

@@ -204,7 +204,7 @@ def compute_modes(
 
     Examples
     --------
-    >>> from flexlift.scenario import load_scenario
+    >>> from flexlift import load_scenario
     >>> from flexlift.structure.hull import hull_from_scenario
     >>> from flexlift.structure.modes import compute_modes
     >>> modes = compute_modes(hull_from_scenario(load_scenario("tanker")))

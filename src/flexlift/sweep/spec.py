@@ -45,8 +45,9 @@ from pathlib import Path
 from flexlift import __version__
 from flexlift.errors import InputError, brief, clean
 from flexlift.fuzzy.fis import load_controller_fis
+from flexlift.loads.scenario import load_scenario
 from flexlift.plumbing import reading
-from flexlift.scenario import ControlMode, Scenario, builtin_names, load_scenario
+from flexlift.scenario import ControlMode, Scenario, builtin_names
 from flexlift.scenario.file import dump_yaml, load_yaml
 from flexlift.sweep.distributions import Distribution, parse_distribution
 from flexlift.sweep.keys import check_key

@@ -11,7 +11,7 @@ structure or a stronger soil meets the same bags rather than a plan redrawn for 
 variable                                law (nominal: the scenario's value)       source
 ======================================  ========================================  ==========
 ``soil.breakout_force_factor``          uniform 0.5-1.5 (x the soil's H0)         R-755
-``seabed.breakout_time_s``              log-uniform 0.5-2 x nominal               R-755
+``seabed.breakout_time_s`` (**)        log-uniform 0.5-2 x nominal               R-755
 ``lift.bags.NAME.capacity_factor``      uniform 0.95-1.25, one draw per bag       incident
 ``hull.submerged_weight_t``             uniform 0.9-1.1 x nominal W'              the user's
 ``disturbance.current_m_s``             uniform nominal -/+ 0.25 m/s              assumed
@@ -19,6 +19,13 @@ variable                                law (nominal: the scenario's value)     
 ``gas.purge_rate_max_m3_s`` (*)         uniform 0.8-1.2 x nominal                 assumed
 ``gas.supply_free_air_m3_min``          uniform 0.8-1.0 x nominal (when stated)   assumed
 ======================================  ========================================  ==========
+
+(**) under the soil's breakout law (``seabed.breakout_law: soil``,
+docs/theory/breakout-soil.md) ``seabed.consolidation_coefficient_m2_s`` instead, log-uniform
+0.5-2 x nominal (the time goes as 1 / c_v), and ``soil.breakout_force_factor`` u scales the
+soil's strength, ``seabed.shear_strength_kPa = u s_u`` (H0 is proportional to it): the timer
+law's keys are not read by the soil law. The field cases check these bands
+(docs/validation/study-bands.md).
 
 (*) the key that sets the external bags' dump valve in the run
 (:func:`flexlift.scenario.valves.external_valve`): ``lift.catalogue_bag.dump_valve_m3_s`` when
@@ -58,6 +65,8 @@ INCIDENT = ("a published incident: a lift bag lifted 25 % over its rating; lower
 SOURCES = {
     SOIL: R755 + "; the band is on H0 = (breakout_factor - 1) W', not the total lift",
     "seabed.breakout_time_s": R755 + "; log-uniform 0.5-2 x nominal",
+    "seabed.consolidation_coefficient_m2_s": R755 + "; log-uniform 0.5-2 x nominal c_v (the "
+                                             "soil law: the time goes as 1 / c_v)",
     BAGS: INCIDENT + "; one independent draw per bag",
     "hull.submerged_weight_t": "the user's range (default +-10 % of the nominal W', assumed: "
                                "give your own under monte_carlo.vary)",
@@ -79,6 +88,8 @@ class StudyPlan:
     wet_weight_t: float
     bags: tuple  # the base's lift.bags, each a dict
     sources: tuple  # (variable, source) pairs, for the report
+    law: str = "timer"  # the base's seabed.breakout_law
+    shear_strength_kPa: float = 0.0  # the base's seabed.shear_strength_kPa (the soil law)
 
 
 STUDIES = {"salvage": "the salvors' uncertainties: soil breakout force and time (R-755), each "
@@ -145,9 +156,10 @@ def default_laws(base, wet_t: float) -> dict:
     """{variable: its law as a SPEC mapping} of the salvage study for ``base`` (pinned)."""
     sb, gas, cur = base.seabed, base.gas, base.disturbance.current_m_s
     valve = external_valve(base)  # the dump valve the run takes, by the key that sets it
+    time = (("seabed.consolidation_coefficient_m2_s", sb.consolidation_coefficient_m2_s)
+            if sb.breakout_law == "soil" else ("seabed.breakout_time_s", sb.breakout_time_s))
     laws = {SOIL: {"dist": "uniform", "low": 0.5, "high": 1.5},
-            "seabed.breakout_time_s": {"dist": "loguniform", "low": 0.5 * sb.breakout_time_s,
-                                       "high": 2.0 * sb.breakout_time_s},
+            time[0]: {"dist": "loguniform", "low": 0.5 * time[1], "high": 2.0 * time[1]},
             BAGS: {"dist": "uniform", "low": 0.95, "high": 1.25},
             "hull.submerged_weight_t": {"dist": "uniform", "low": 0.9 * wet_t,
                                         "high": 1.1 * wet_t},
@@ -197,7 +209,9 @@ def study_distributions(name: str, base, user: dict, fixed: dict, where: str):
                                                     law.low, law.high)
     sources = tuple({group_of(k): _source(k, user, defaults) for k in laws}.items())
     bags = tuple(b.model_dump(mode="json", exclude_none=True) for b in pinned.lift.bags)
-    return pinned, out, StudyPlan(name, bf0, wet_t, bags, sources)
+    return pinned, out, StudyPlan(name, bf0, wet_t, bags, sources,
+                                  law=pinned.seabed.breakout_law,
+                                  shear_strength_kPa=pinned.seabed.shear_strength_kPa)
 
 
 def _source(key: str, user: dict, defaults: dict) -> str:
@@ -212,7 +226,9 @@ def _source(key: str, user: dict, defaults: dict) -> str:
 def study_changes(plan: StudyPlan, values: dict) -> dict:
     """The scenario changes of a case's study ``values`` (plain keys pass through)."""
     out = {k: v for k, v in values.items() if k != SOIL and not is_bag_key(k)}
-    if SOIL in values:
+    if SOIL in values and plan.law == "soil":  # H0 = A s_u N_c: u H0 is u s_u
+        out["seabed.shear_strength_kPa"] = float(values[SOIL]) * plan.shear_strength_kPa
+    elif SOIL in values:
         wet = float(values.get("hull.submerged_weight_t", plan.wet_weight_t))
         out["lift.breakout_factor"] = 1.0 + (float(values[SOIL]) * (plan.breakout_factor - 1.0)
                                              * plan.wet_weight_t / wet)

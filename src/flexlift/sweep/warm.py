@@ -26,7 +26,7 @@ def warm_up() -> bool:
     """Run a one-second ascent of the tanker in each control mode's plant; True when done."""
     try:
         from flexlift.ascent import simulate
-        from flexlift.scenario import load_scenario
+        from flexlift.loads.scenario import load_scenario
 
         tanker = load_scenario("tanker")
         for mode in ("coordinated", "paper"):

@@ -1,0 +1,181 @@
+"""The field cases (docs/validation/index.md): flexlift against what real lifts measured, each
+case's shipped scenario run and held inside the band its page states and argues."""
+
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from flexlift import constants as C
+from flexlift import load_scenario
+from flexlift.ascent import simulate
+from flexlift.ascent.plant import coupled_plant
+from flexlift.physics import seabed
+from flexlift.physics.gas import ambient_pressure
+from flexlift.sweep.studies import SOIL, default_laws
+
+CASES = yaml.safe_load((resources.files("flexlift") / "data" / "field_cases.yaml").read_text())
+R755 = CASES["r755"]
+
+
+def tonnes(newton: float, scenario) -> float:
+    return newton / (C.TONNE * scenario.environment.gravity_m_s2)
+
+
+def events(result) -> dict:
+    out: dict = {}
+    for e in result.events:
+        out.setdefault(e["kind"], e["time_s"])
+    return out
+
+
+# ----------------------------------------------------------------------- Grieg feed barge
+@pytest.fixture(scope="module")
+def grieg():
+    sc = load_scenario(CASES["grieg-barge"]["scenario"])
+    return sc, coupled_plant(sc), simulate(sc, control="open-loop")
+
+
+def test_grieg_release_lift_within_the_r755_band(grieg):
+    """The soil law's release lift W' + H0 is within R-755's +-50 % of the ~750 t the salvors
+    needed; the timer law's default 1.3 W' falls below that band (the page's finding)."""
+    sc, p, _ = grieg
+    case = CASES["grieg-barge"]
+    measured, band = case["release_lift_t"], R755["force_accuracy"]
+    wet = tonnes(p.wet_weight, sc)
+    assert wet == pytest.approx(case["wet_weight_t"], abs=0.5)
+    release = wet + tonnes(float(p.seabed.H0.sum()), sc)
+    assert (1 - band) * measured <= release <= (1 + band) * measured
+    assert 1.3 * wet < (1 - band) * measured
+
+
+def test_grieg_comes_free_under_the_lift_the_law_predicts(grieg):
+    """Under a pull of 92 % of H0 the barge separates within ten minutes, at the soil law's
+    time for the pull it held, with a total lift inside the band."""
+    sc, p, r = grieg
+    t_sep = events(r)["separation"]
+    t = r.dataset.time.values
+    held = float(r.dataset.uplift.values[np.argmin(np.abs(t - 0.5 * t_sep))])
+    assert t_sep < 600.0
+    assert t_sep == pytest.approx(seabed.soil_separation_time(
+        held, float(p.seabed.H0.sum()), p.seabed.consolidation_time), rel=0.05, abs=15.0)
+    lift = tonnes(p.wet_weight + held, sc)
+    measured, band = CASES["grieg-barge"]["release_lift_t"], R755["force_accuracy"]
+    assert (1 - band) * measured <= lift <= (1 + band) * measured
+
+
+# ---------------------------------------------------------------------------- Ehime Maru
+@pytest.fixture(scope="module")
+def ehime():
+    return simulate(load_scenario(CASES["ehime-maru"]["scenario"]), control="open-loop")
+
+
+def test_ehime_maru_breaks_out_in_the_hours_the_field_saw(ehime):
+    """From the pull taken up to separation, the soil law gives a time within R-755's +-100 %
+    of the 2 h the Navy reported, read as a factor of 2 either way (1 h to 4 h)."""
+    case, r = CASES["ehime-maru"], ehime
+    assert r.summary()["breakout_law"] == "soil"
+    t_sep, measured = events(r)["separation"], case["breakout_after_slack_s"]
+    factor = 1.0 + R755["time_accuracy"]
+    assert measured / factor <= t_sep <= measured * factor
+
+
+# -------------------------------------------------------------------------- IMCA flange
+@pytest.fixture(scope="module")
+def flange():
+    sc = load_scenario(CASES["imca-flange"]["scenario"])
+    return sc, simulate(sc, control="open-loop")
+
+
+def test_imca_flange_surfaces_spills_and_falls_back(flange):
+    """The bag 25 % over its rating lifts the 0.6 t flange from 19 m, breaks the surface,
+    loses most of its gas there, and the flange falls back onto the seabed."""
+    sc, r = flange
+    p = coupled_plant(sc)
+    rated = CASES["imca-flange"]["bag_rating_t"] * C.TONNE / sc.environment.seawater_density_kg_m3
+    assert float(p.bags.capacity[0]) >= CASES["imca-flange"]["capacity_over_rating"] * rated * 0.99
+    ev = events(r)
+    assert ev["separation"] < ev["surface_breach"] < ev["resettle"]
+    t, V = r.dataset.time.values, r.dataset.gas_volume.values[:, 0]
+    before = V[np.searchsorted(t, ev["surface_breach"]) - 5]
+    after = V[min(np.searchsorted(t, ev["resettle"]), t.size - 1)]
+    assert after < 0.5 * before
+    assert r.dataset.height.values[-1, 0] < 0.5  # back on the seabed
+
+
+# --------------------------------------------------------------------------- IMCA spool
+@pytest.fixture(scope="module")
+def spool():
+    sc = load_scenario(CASES["imca-spool"]["scenario"])
+    return sc, simulate(sc, control="open-loop")
+
+
+def test_imca_spool_runs_away_from_its_buoyancy(spool):
+    """50 kg over neutral at 55 msw: the open bags' gas expands as the spool rises, so it
+    accelerates past 36 msw (where the diver cut free) to the surface; the lift at 36 msw over
+    the lift at the seabed is the pressure ratio (the bags not yet full)."""
+    case = CASES["imca-spool"]
+    sc, r = spool
+    ds, ev = r.dataset, events(r)
+    assert "separation" in ev and "surface_breach" in ev
+    t, h = ds.time.values, ds.height.values.mean(axis=1)
+    v = np.gradient(h, t)
+    rise = case["seabed_depth_msw"] - case["diver_reached_msw"]
+    k1, k19 = np.argmax(h >= 1.0), np.argmax(h >= rise)
+    assert v[k19] > 3.0 * v[k1] > 0.0
+    b = ds.buoyancy.values.sum(axis=1)
+    k0 = np.searchsorted(t, ev["separation"])
+    env = sc.environment
+    rho_g = env.seawater_density_kg_m3 * env.gravity_m_s2
+
+    def p(z):
+        return ambient_pressure(z, env.water_depth_m, env.atmospheric_pressure_Pa, rho_g)
+    z0, z19 = ds.height.values[k0].mean(), ds.height.values[k19].mean()
+    assert b[k19] / b[k0] == pytest.approx(p(z0) / p(z19), rel=0.03)
+
+
+# ------------------------------------------------------- the study's bands and the cases
+def study_soil_range() -> tuple[float, float]:
+    laws = default_laws(load_scenario("tanker"), 1.0)
+    return laws[SOIL]["low"], laws[SOIL]["high"]
+
+
+def case_breakout_factors() -> dict:
+    """Each breakout case's breakout force over the study's nominal H0 = 0.3 W'
+    (docs/validation/study-bands.md)."""
+    g, v, c = CASES["grieg-barge"], CASES["lee2016-vessel"], CASES["lee2016-caisson"]
+    return {"grieg-barge": (g["release_lift_t"] - g["wet_weight_t"]) / (0.3 * g["wet_weight_t"]),
+            "lee2016-vessel": v["bottom_friction_MN"] / (0.3 * v["wet_weight_MN"]),
+            "lee2016-caisson": c["bottom_friction_MN"] / (0.3 * c["wet_weight_MN"])}
+
+
+def test_the_study_soil_band_against_the_cases_scatter():
+    """The salvage study draws H0 from 0.5-1.5 x nominal (R-755's +-50 %); the cases' own
+    breakout forces span 0.47-7.6 x: only the caisson lies inside, the vessel just below and
+    the buried barge far above (docs/validation/study-bands.md)."""
+    low, high = study_soil_range()
+    assert (low, high) == (1 - R755["force_accuracy"], 1 + R755["force_accuracy"])
+    f = case_breakout_factors()
+    assert f["lee2016-vessel"] == pytest.approx(0.47, abs=0.01)
+    assert f["lee2016-caisson"] == pytest.approx(0.52, abs=0.01)
+    assert f["grieg-barge"] == pytest.approx(7.6, abs=0.1)
+    assert sorted(k for k, x in f.items() if not low <= x <= high) == ["grieg-barge",
+                                                                       "lee2016-vessel"]
+
+
+# ------------------------------------------------------------------ the summary's numbers
+def test_the_summary_page_quotes_these_runs(grieg, ehime, flange, spool):
+    """docs/validation/index.md states the runs' numbers: they are these runs' (a change of a
+    law that moves them must update the page)."""
+    page = (Path(__file__).parents[2] / "docs" / "validation" / "index.md").read_text()
+    sc, p, r = grieg
+    release = tonnes(p.wet_weight + float(p.seabed.H0.sum()), sc)
+    quoted = [f"{release:.0f} t (W′ + H₀", f"free in {events(r)['separation']:.0f} s",
+              f"{1.3 * tonnes(p.wet_weight, sc):.0f} t (1.3 W′)",
+              f"{events(ehime)['separation'] / 3600:.2f} h",
+              f"breaks the surface {events(flange[1])['surface_breach']:.1f} s",
+              f"resettles {events(flange[1])['resettle']:.0f} s"]
+    for text in quoted:
+        assert text in page, text
