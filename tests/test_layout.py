@@ -19,14 +19,19 @@ ALLOWED = {
     "physics": set(),  # the laws: first, used by the lift plan, the loop and the strength
     "control": {"scenario", "fuzzy", "physics"},
     "ascent": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control"},
+    # what a lift's sensors give, read off the loop's state (sensors/truth.py), and its log
+    "sensors": {"scenario", "physics", "ascent"},
+    # the filter over the plant (estimate/): the loop's ensemble, the sensors' readings
+    "estimate": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
+                 "ascent", "sensors"},
     "output": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                "ascent"},
     "stages": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-               "ascent", "output"},
+               "ascent", "output", "sensors"},
     "sweep": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
               "ascent", "output", "stages"},
     "cli": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-            "ascent", "output", "stages", "sweep"},
+            "ascent", "sensors", "estimate", "output", "stages", "sweep"},
 }
 TOP = {"constants", "errors", "_jit", "_struct", "_threads", "_worker_process", "__init__",
        "__main__"}
