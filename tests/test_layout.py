@@ -19,7 +19,11 @@ ALLOWED = {
     "physics": set(),  # the laws: first, used by the lift plan, the loop and the strength
     "control": {"scenario", "fuzzy", "physics"},
     "ascent": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control"},
-    "sensors": {"scenario", "physics", "ascent"},  # true values from the loop's records
+    # what a lift's sensors give, read off the loop's state (sensors/truth.py), and its log
+    "sensors": {"scenario", "physics", "ascent"},
+    # the filter over the plant (estimate/): the loop's ensemble, the sensors' readings
+    "estimate": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
+                 "ascent", "sensors"},
     "output": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                "ascent"},
     "live": {"scenario", "physics", "control", "ascent", "sensors", "output"},  # rig and live
@@ -28,7 +32,7 @@ ALLOWED = {
     "sweep": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
               "ascent", "output", "stages"},
     "cli": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-            "ascent", "output", "stages", "sweep", "sensors", "live"},
+            "ascent", "sensors", "estimate", "output", "stages", "sweep", "live"},
 }
 TOP = {"constants", "errors", "_jit", "_struct", "_threads", "_worker_process", "__init__",
        "__main__"}

@@ -7,9 +7,9 @@ import tracemalloc
 import numpy as np
 import pytest
 
+from flexlift import load_scenario
 from flexlift.cli import main
 from flexlift.errors import InputError
-from flexlift.scenario import load_scenario
 from flexlift.scenario.schema import parse_scenario
 from flexlift.sensors import LogReader, LogWriter, Reading, SensorModel, sensors_of
 from flexlift.sensors.config import Sensor

@@ -1,0 +1,1 @@
+"""State estimation from sensor readings (docs/theory/estimation.md)."""
