@@ -31,8 +31,11 @@ ALLOWED = {
                "ascent", "output", "sensors"},
     "sweep": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
               "ascent", "output", "stages"},
+    # the plan search: the static checks, the batch loop, the single failures and the study
+    "design": {"scenario", "structure", "loads", "physics", "ascent", "output", "stages",
+               "sweep"},
     "cli": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-            "ascent", "sensors", "estimate", "output", "stages", "sweep", "live"},
+            "ascent", "sensors", "estimate", "output", "stages", "sweep", "live", "design"},
 }
 TOP = {"constants", "errors", "_jit", "_struct", "_threads", "_worker_process", "__init__",
        "__main__"}

@@ -9,7 +9,7 @@ The packages are floors; each imports only from the floors below it (tests/test_
 holds the same list and checks every import against it):
 
     layers: plumbing, physics, scenario, structure, loads, dynamics, fuzzy, control, ascent,
-            sensors, estimate, output, live, stages, sweep, cli
+            sensors, estimate, output, live, stages, sweep, design, cli
 
 ``plumbing`` (files written atomically, files read within bounds, the output lock and the
 marker) is the bottom floor every layer may use; the top-level helpers (``constants``,

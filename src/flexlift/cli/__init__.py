@@ -32,7 +32,7 @@ from flexlift.errors import LINE_LIMIT, InputError, SimulationError, clean
 
 #: sub-command modules, in the order of the analysis
 COMMANDS = ("run", "modes", "loads", "statics", "reduce", "fuzzy", "simulate", "sweep",
-            "contingency", "rig", "live")
+            "contingency", "design", "rig", "live")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -39,7 +39,7 @@ RHO_RULE = 1025.0  # [kg/m^3] seawater density of the volume rule
 RELIEF_CLOSED_BAR = 0.1  # closed parachute and enclosed bags relieve 10 kPa over ambient
 DUMP_TIME_S = 120.0  # a generic dump valve empties a full bag in this time
 FIELDS = ("type", "lift_t", "diameter_m", "length_m", "working_pressure_bar", "relief_bar",
-          "dump_valve_m3_s", "rated_depth_m", "cone_top_m", "as_published", "source")
+          "dump_valve_m3_s", "rated_depth_m", "cone_top_m", "cost", "as_published", "source")
 REQUIRED = ("type", "lift_t", "diameter_m", "length_m")
 UPRIGHT = ("open_parachute", "closed_parachute")  # length_m is the height, mouth down
 
@@ -114,7 +114,7 @@ def check_entry(name: str, entry, source: str, packaged: bool = False) -> dict:
         raise InputError.from_line(f"{where}: type {clean(str(entry['type']), 40)} is not one "
                                    f"of {', '.join(TYPES)}")
     for f in ("lift_t", "diameter_m", "length_m", "working_pressure_bar", "relief_bar",
-              "dump_valve_m3_s", "rated_depth_m", "cone_top_m"):
+              "dump_valve_m3_s", "rated_depth_m", "cone_top_m", "cost"):
         v = entry.get(f)
         if v is not None and not (_num(v) and v > 0):
             raise InputError.from_line(f"{where}: {f} = {clean(str(v), 40)} must be a positive "

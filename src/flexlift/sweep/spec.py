@@ -251,6 +251,7 @@ def parse_spec(data, source: str = "spec", folder: Path | None = None,
         raise InputError.from_line(f"{source}: give either grid: (values per key) or "
                                    "monte_carlo: (samples, seed, vary), not "
                                    f"{'both' if 'grid' in data else 'neither'}")
+    base_ref = base_ref.name if isinstance(base_ref, Scenario) else base_ref
     common = dict(source=source, base=base, base_ref=str(base_ref), controls=controls, keep=keep,
                   fixed=fixed, worst=worst)
     if "grid" in data:
@@ -320,6 +321,8 @@ def _mapping(value, where: str) -> dict:
 
 
 def _base(ref, source: str, folder: Path | None) -> Scenario:
+    if isinstance(ref, Scenario):  # a caller's scenario in memory (flexlift.design)
+        return ref
     if not isinstance(ref, str) or not ref:
         raise InputError(f"{source}: base", brief(ref, 40), "a built-in name "
                          f"({', '.join(builtin_names())}) or a path to a scenario YAML file")

@@ -1,0 +1,87 @@
+"""``flexlift design`` on the tanker (built-in), the pipeline (built-in) and a heavy 1,800 t
+wreck (``benchmarks/design_heavy.yaml``), each as a user runs it (a child process, 2 local
+workers), with a time limit.
+
+For each: the wall time, the evaluations by rung (``summary.json``'s ``evaluations``), the
+proposal's bags against the N-1 lower bound, its single failures and its salvage study
+(P(unsafe) with its interval and the cases it rests on), and whether a second run of the same
+seed on the same folder gives the same plan (from the cache: ``--repeat``). The load average
+before and after is recorded: the machine may be shared.
+
+Goals (issue 41, the tanker): 0 unsafe and 0 incomplete single failures; 0 unsafe in >= 300
+complete salvage cases; fewer bags than 73 and at most 1.25 x the N-1 bound; <= 30 min.
+
+Usage: ``python benchmarks/design.py [--cases tanker,pipeline,heavy] [--budget 24]
+[--limit 1800] [--repeat]``; writes ``benchmarks/design.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CASES = {"tanker": "tanker", "pipeline": "pipeline",
+         "heavy": str(ROOT / "benchmarks" / "design_heavy.yaml")}
+
+
+def run_case(name: str, budget: int, limit: float, folder: Path) -> dict:
+    out = folder / f"design-{name}"
+    cmd = [sys.executable, "-m", "flexlift", "design", CASES[name], "--out", str(out),
+           "--budget", str(budget), "--workers", "2", "--json"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"), MPLBACKEND="Agg")
+    t0 = time.perf_counter()
+    try:
+        res = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=limit)
+    except subprocess.TimeoutExpired:
+        return {"case": name, "wall_s": round(time.perf_counter() - t0, 1),
+                "finished": False, "note": f"stopped at the {limit:g} s limit"}
+    row = {"case": name, "wall_s": round(time.perf_counter() - t0, 1), "rc": res.returncode,
+           "finished": res.returncode in (0, 1)}
+    if not row["finished"]:
+        row["stderr"] = res.stderr[-800:]
+        return row
+    s = json.loads(res.stdout)
+    b, lb = s["best"], s["lower_bound"]
+    row.update(evaluations=s["evaluations"], lower_bound=lb, found=s["found"],
+               own_plan={k: v for k, v in (s["own_plan"] or {}).items() if k != "statics"})
+    if b is not None:
+        row.update(bags=b["bags"], model=b["types"][0], points=len(b["points"]),
+                   ratio_to_n_minus_1=round(b["bags"] / lb["n_minus_1"], 3),
+                   contingency=b["contingency"], p_unsafe=b["p_unsafe"],
+                   salvage_counts=b["salvage_counts"])
+    return row
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", default="tanker,pipeline,heavy")
+    ap.add_argument("--budget", type=int, default=24)
+    ap.add_argument("--limit", type=float, default=1800.0, help="per case [s]")
+    ap.add_argument("--repeat", action="store_true", help="run each again (same seed)")
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "design.json"))
+    args = ap.parse_args(argv)
+    result = {"load_before": os.getloadavg(), "budget": args.budget, "cases": []}
+    with tempfile.TemporaryDirectory(prefix="flexlift-bench-design-") as tmp:
+        for name in args.cases.split(","):
+            row = run_case(name, args.budget, args.limit, Path(tmp))
+            if args.repeat and row.get("finished"):
+                again = run_case(name, args.budget, args.limit, Path(tmp))
+                row["repeat"] = {"wall_s": again["wall_s"],
+                                 "same_plan": again.get("bags") == row.get("bags")
+                                 and again.get("model") == row.get("model")}
+            result["cases"].append(row)
+            Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
+    result["load_after"] = os.getloadavg()
+    Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
+    return result
+
+
+if __name__ == "__main__":
+    print(json.dumps(main(), indent=1))

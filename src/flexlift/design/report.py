@@ -1,0 +1,170 @@
+"""The designer's report (``report.html``) and its figure (``pareto.png``), and the words
+for a search that found no plan (docs/guide/design.md).
+
+The report leads with the decision: the proposal beside the user's own plan (bags, single
+failures, P(unsafe)), then the lower bound, the Pareto front, why each nearby alternative was
+rejected (the rung, the check, the failure and its margin) and the evaluations by rung.
+"""
+
+from __future__ import annotations
+
+import html
+from collections import Counter
+from pathlib import Path
+
+from flexlift.plumbing.atomic import write_bytes, write_text
+
+RUNG_TEXT = {"statics": "static checks", "nominal": "nominal ascent",
+             "contingency": "single failures", "salvage": "salvage study"}
+
+
+def nearby(rows: list[dict], best: dict | None, n: int = 8) -> list[dict]:
+    """The rejected candidates nearest the proposal (by bags; the fewest when none): each
+    with the rung, the check and why it failed."""
+    seen, out = set(), []
+    ref = best["bags"] if best else 0
+    for r in sorted((r for r in rows if not r["passed"]),
+                    key=lambda r: (abs(r["bags"] - ref), r["bags"])):
+        if r["candidate_key"] in seen:
+            continue
+        seen.add(r["candidate_key"])
+        rej = r.get("rejected") or {}
+        out.append({"bags": r["bags"], "model": r["candidate"]["model"],
+                    "points": r["candidate"]["points"], "mode": r["candidate"]["mode"],
+                    "rung": rej.get("rung"), "check": rej.get("check"),
+                    "why": rej.get("why", "")})
+        if len(out) == n:
+            break
+    return out
+
+
+def no_plan(rows: list[dict], space) -> dict:
+    """What no candidate survived and what would change it."""
+    where = Counter((r.get("rejected") or {}).get("rung") for r in rows)
+    checks = Counter(f"{(r.get('rejected') or {}).get('rung')}: "
+                     f"{(r.get('rejected') or {}).get('check')}" for r in rows)
+    hints = []
+    if checks and all(k.startswith("statics") for k in checks):
+        worst = checks.most_common(1)[0][0]
+        if "lift" in worst or "clusters" in worst:
+            hints.append("a larger catalogue bag, or a longer attachment span: the bags "
+                         "offered cannot carry the required lift on this hull")
+        if "strength" in worst:
+            hints.append("more lift points, spreading the lift along the hull")
+    if where.get("contingency"):
+        hints.append("a second supply or a larger dump valve (--dump-valve), or more bags "
+                     "(--over): some single failure is unsafe for every plan tried")
+    if where.get("salvage"):
+        hints.append("a slower planned ascent (--speeds) or more margin (--over): the salvage "
+                     "study's P(unsafe) bound stays above the target")
+    return {"rejected_at": dict(where), "checks": dict(checks.most_common(8)),
+            "what_would_change_it": hints or ["a wider search (--budget, --over, --points)"],
+            "best_candidates": nearby(rows, None, 5)}
+
+
+def _figure(summary: dict, rows: list[dict]) -> bytes:
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=100)
+    for rung, marker in (("statics", "x"), ("nominal", "v"), ("contingency", "s"),
+                         ("salvage", "o")):
+        pts = [(r["bags"], r.get("gas_m3") or 0) for r in rows
+               if not r["passed"] and (r.get("rejected") or {}).get("rung") == rung]
+        if pts:
+            ax.scatter(*zip(*pts), marker=marker, alpha=0.5,
+                       label=f"rejected: {RUNG_TEXT[rung]}")
+    front = [(p["bags"], p["gas_m3"] or 0) for p in summary["pareto"]]
+    if front:
+        ax.plot(*zip(*front), "k-o", label="Pareto front (feasible)")
+    lb = summary["lower_bound"]
+    ax.axvline(lb["n_minus_1"], color="grey", ls="--", label="N-1 lower bound")
+    ax.set_xlabel("bags")
+    ax.set_ylabel("gas, free air [m3]")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _row(cells, head=False) -> str:
+    tag = "th" if head else "td"
+    return "<tr>" + "".join(f"<{tag}>{html.escape(str(c))}</{tag}>" for c in cells) + "</tr>"
+
+
+def _p(p: dict | None) -> str:
+    if not p or p.get("p") is None:
+        return "not run"
+    return f"{p['p']:.3f} ({p['low']:.3f}-{p['high']:.3f}, n = {p['n']})"
+
+
+def _counts(c: dict | None) -> str:
+    if not c:
+        return "not run"
+    return ", ".join(f"{v} {k}" for k, v in c.items() if v)
+
+
+def _decision(summary: dict) -> str:
+    b, lb = summary["best"], summary["lower_bound"]
+    if b is None:
+        return ("<p><b>No plan found</b> in the space searched: every candidate failed a "
+                "check (below: where, and what would change it).</p>")
+    return (f"<p><b>Rig {b['bags']} x {html.escape(b['types'][0])}</b> at {len(b['points'])} "
+            f"lift points ({html.escape(b['mode'])} control, {b['ascent_speed_m_s']:g} m/s): "
+            f"the least found that passed every check up to the {RUNG_TEXT[b['reached']]}; "
+            f"{b['bags'] / lb['n_minus_1']:.2f} x the N-1 lower bound of {lb['n_minus_1']} "
+            "bags.</p>")
+
+
+def _side_by_side(summary: dict) -> str:
+    own, b = summary.get("own_plan"), summary["best"]
+    rows = [_row(["", "your plan", "proposal"], True)]
+    o = own or {}
+    rows.append(_row(["bags", o.get("bags", "-"), b["bags"] if b else "-"]))
+    rows.append(_row(["static checks", (o.get("statics") or {}).get("check") or "passed"
+                      if own else "-", "passed" if b else "-"]))
+    rows.append(_row(["nominal ascent", (o.get("nominal") or {}).get("outcome", "-"),
+                      "safe" if b else "-"]))
+    rows.append(_row(["single failures", _counts((o.get("contingency") or {}).get("counts")),
+                      _counts(b["contingency"]) if b else "-"]))
+    rows.append(_row(["P(unsafe), salvage study", _p((o.get("salvage") or {}).get("p_unsafe")),
+                      _p(b["p_unsafe"]) if b else "-"]))
+    return "<table>" + "".join(rows) + "</table>"
+
+
+def write(folder: Path, summary: dict, rows: list[dict]) -> None:
+    """``pareto.png`` and ``report.html`` into ``folder``."""
+    write_bytes(folder / "pareto.png", _figure(summary, rows))
+    lb, ev = summary["lower_bound"], summary["evaluations"]
+    parts = [f"<h1>flexlift design: {html.escape(summary['scenario'])}</h1>",
+             _decision(summary), _side_by_side(summary),
+             f"<h2>Lower bound</h2><p>{html.escape(lb['model'])}: the required "
+             f"{lb['required_lift_t']:,.0f} t needs N = {lb['n']} bags; still lifting after "
+             f"losing any one, N-1 = {lb['n_minus_1']}.</p>",
+             "<h2>Pareto front</h2><img src='pareto.png' alt='bags and gas of every "
+             "candidate'>",
+             "<table>" + _row(["bags", "model", "gas m3", "cost", "P(unsafe)"], True)
+             + "".join(_row([p["bags"], p["types"][0], p["gas_m3"], p["cost"],
+                             _p(p["p_unsafe"])]) for p in summary["pareto"]) + "</table>",
+             "<h2>Why the nearby alternatives were rejected</h2><table>"
+             + _row(["bags", "model", "points", "rung", "check", "why"], True)
+             + "".join(_row([n["bags"], n["model"], n["points"], RUNG_TEXT.get(n["rung"], ""),
+                             n["check"], n["why"]]) for n in summary["nearby"]) + "</table>"]
+    if summary["no_plan"]:
+        np_ = summary["no_plan"]
+        parts.append("<h2>No plan: what would change it</h2><ul>" + "".join(
+            f"<li>{html.escape(h)}</li>" for h in np_["what_would_change_it"]) + "</ul>")
+    parts.append(f"<h2>Evaluations</h2><p>{ev['candidates']} candidates ({ev['distinct']} "
+                 "distinct); reached each rung: " + ", ".join(
+                     f"{RUNG_TEXT[k]} {v}" for k, v in ev["reached"].items())
+                 + f"; answered from the cache: {ev['cache_hits']}; "
+                 f"{summary['elapsed_s']:.0f} s.</p>")
+    write_text(folder / "report.html", "<!doctype html><html><head><meta charset='utf-8'>"
+               "<title>flexlift design</title></head><body>" + "\n".join(parts)
+               + "</body></html>\n")

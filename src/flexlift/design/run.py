@@ -1,0 +1,185 @@
+"""``run_design``: the search into an output folder, its answer and its files
+(docs/guide/design.md).
+
+The folder is written in place (:func:`flexlift.output.folders.incremental_folder`: a rerun
+of the same search continues it): ``evaluations.jsonl`` (the cache, one line per candidate),
+then at the end ``summary.json``, ``candidates.csv``, ``plan.yaml`` (the proposal, a scenario
+that ``flexlift run``, ``contingency`` and ``sweep --study salvage`` take as it is; absent
+when no plan was found), ``pareto.png`` and ``report.html``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import time
+from pathlib import Path
+
+from flexlift.design import report
+from flexlift.design.cache import Cache
+from flexlift.design.search import RUNGS, Options, check_options, run_search
+from flexlift.design.space import Space
+from flexlift.plumbing.atomic import write_json, write_text
+
+COMMAND = "design"
+FILES = ("evaluations.jsonl", "summary.json", "candidates.csv", "plan.yaml", "pareto.png",
+         "report.html")
+
+
+def run_design(scenario, space: Space, options: Options, out, engine=None, progress=None,
+               compare: bool = True) -> dict:
+    """Search ``space`` for the plan of ``scenario`` into the folder ``out``; returns the
+    summary (also ``summary.json``). ``engine``: where contingency and study cases run
+    (default local processes, one per core), started once and closed at the end;
+    ``compare``: the user's own plan through the same dynamic rungs, for the report."""
+    from flexlift.output.folders import incremental_folder
+    from flexlift.sweep.executors import make_engine
+
+    check_options(options, space)
+    t0 = time.perf_counter()
+    identity = options.identity(scenario, space)
+    with incremental_folder(out, COMMAND, identity) as inc:
+        inc.claim(*FILES)
+        engine = engine or (make_engine() if RUNGS.index(options.up_to) >= 2 else None)
+        try:
+            found = run_search(scenario, space, options, engine, Cache(inc.path, identity),
+                               progress)
+            own = own_plan(scenario, found["evaluator"], options) if compare else None
+        except BaseException:
+            if engine is not None:
+                engine.close(cancel=True)
+            raise
+        if engine is not None:
+            engine.close()
+        summary = summarise(scenario, space, options, found, own, time.perf_counter() - t0)
+        _write(inc.path, summary, found, scenario)
+        inc.finish()
+    return summary
+
+
+def own_plan(scenario, ev, options: Options) -> dict:
+    """The user's plan through every rung (none stops it), for the side-by-side."""
+    from flexlift.design import dynamic
+    from flexlift.design.statics import static_checks
+
+    out = {"statics": static_checks(scenario, ev.hull, options.tolerant),
+           "nominal": dynamic.nominal([scenario], options.batch)[0]}
+    from flexlift.loads.liftplan import plan_lift
+
+    out["bags"] = plan_lift(scenario, ev.hull).bag_count
+    last = RUNGS.index(options.up_to)
+    if last >= 2:
+        out["contingency"] = dynamic.contingency(scenario, ev.engine, options.kinds,
+                                                 stop=False)
+    if last >= 3:
+        out["salvage"] = dynamic.salvage(scenario, ev.engine, options.target, options.samples,
+                                         options.study_seed, options.block)
+    return out
+
+
+def pareto(rows: list[dict], names) -> list[dict]:
+    """The feasible rows no other feasible row dominates in the objectives ``names``."""
+    from flexlift.design.search import objective_values
+
+    ok = {r["candidate_key"]: r for r in rows if r["passed"]}
+    vals = {k: objective_values(r, names) for k, r in ok.items()}
+
+    def dominated(k):
+        a = vals[k]
+        return any(all(x <= y for x, y in zip(b, a)) and b != a for b in vals.values())
+
+    front = [r for k, r in ok.items() if not dominated(k)]
+    # ties broken by the lower bending utilisation in the design cases
+    return sorted(front, key=lambda r: (objective_values(r, names),
+                                        (r.get("statics") or {}).get("utilisation") or 0.0))
+
+
+def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
+    rows = found["rows"]
+    for r in rows:
+        r["candidate_key"] = _key(r)
+    ev = found["evaluator"]
+    front = pareto(rows, options.objectives)
+    best = front[0] if front else None
+    model = best["candidate"]["model"] if best else _closest(rows)["candidate"]["model"]
+    reached = {rung: sum(1 for r in rows if RUNGS.index(r["reached"]) >= k)
+               for k, rung in enumerate(RUNGS)}
+    return {
+        "scenario": scenario.name, "found": best is not None,
+        "best": _brief(best) if best else None,
+        "pareto": [_brief(r) for r in front],
+        "lower_bound": {**ev.bounds[model], "model": model},
+        "evaluations": {"candidates": len(rows), "distinct": len({r["candidate_key"]
+                                                                  for r in rows}),
+                        "reached": reached, "calls": found["calls"],
+                        "cache_hits": found["cache_hits"]},
+        "no_plan": None if best else report.no_plan(rows, space),
+        "own_plan": own, "options": {k: (list(v) if isinstance(v, tuple) else v)
+                                     for k, v in vars(options).items()},
+        "space": {"models": list(space.models), "points": list(space.points),
+                  "over": list(space.over), "count": space.count, "modes": list(space.modes),
+                  "ascent_speeds_m_s": list(space.ascent_speeds),
+                  "breakout_pulls_t": list(space.breakout_pulls),
+                  "dump_valve_factors": list(space.dump_valve_factors),
+                  "span_m": list(space.span_m)},
+        "nearby": report.nearby(rows, best),
+        "elapsed_s": round(elapsed, 2),
+    }
+
+
+def _key(r: dict) -> str:
+    from flexlift.design.space import Candidate
+
+    return Candidate(**r["candidate"]).key()
+
+
+def _closest(rows: list[dict]) -> dict:
+    """The row that climbed highest (fewest bags among those)."""
+    return max(rows, key=lambda r: (RUNGS.index(r["reached"]), r["passed"], -r["bags"]))
+
+
+def _brief(r: dict) -> dict:
+    c = r.get("contingency") or {}
+    s = r.get("salvage") or {}
+    return {"bags": r["bags"], "types": [r["candidate"]["model"]], "type": r["type"],
+            "lift_t": r["lift_t"], "points": [{"x_m": x, "count": n} for x, n in
+                                              zip(r.get("points_m", []), r["counts"])],
+            "gas_m3": r.get("gas_m3"), "cost": r.get("cost"),
+            "mode": r["candidate"]["mode"],
+            "ascent_speed_m_s": r["candidate"]["ascent_speed_m_s"],
+            "breakout_pull_t": r["candidate"]["breakout_pull_t"],
+            "dump_valve_factor": r["candidate"]["dump_valve_factor"],
+            "reached": r["reached"], "contingency": c.get("counts"),
+            "contingency_cases": c.get("cases"), "p_unsafe": s.get("p_unsafe"),
+            "salvage_counts": s.get("counts"), "key": r["candidate_key"]}
+
+
+def _write(folder: Path, summary: dict, found: dict, scenario) -> None:
+    rows = found["rows"]
+    write_json(folder / "summary.json", summary)
+    write_text(folder / "candidates.csv", _csv(rows))
+    if summary["best"] is not None:
+        from flexlift.design.space import Candidate
+
+        best = next(r for r in rows if r["candidate_key"] == summary["best"]["key"])
+        plan = found["evaluator"].scenario_of(Candidate(**best["candidate"]))
+        write_text(folder / "plan.yaml", "# proposed by flexlift design: "
+                   f"{best['bags']} x {best['candidate']['model']}\n" + plan.to_yaml())
+    report.write(folder, summary, rows)
+
+
+def _csv(rows: list[dict]) -> str:
+    cols = ("trial", "key", "model", "bags", "points", "counts", "mode", "ascent_speed_m_s",
+            "breakout_pull_t", "dump_valve_factor", "gas_m3", "cost", "reached", "passed",
+            "rejected_rung", "rejected_check", "rejected_why")
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(cols)
+    for r in rows:
+        c, rej = r["candidate"], r.get("rejected") or {}
+        w.writerow([r["trial"], r["candidate_key"], c["model"], r["bags"], c["points"],
+                    " ".join(map(str, r["counts"])), c["mode"], c["ascent_speed_m_s"],
+                    c["breakout_pull_t"], c["dump_valve_factor"], r.get("gas_m3"),
+                    r.get("cost"), r["reached"], r["passed"], rej.get("rung", ""),
+                    rej.get("check", ""), rej.get("why", "")])
+    return buf.getvalue()

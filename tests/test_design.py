@@ -1,0 +1,182 @@
+"""flexlift design (issue 41): the lower bound, the toy optimum, the ladder, the cache and
+resume, plan.yaml, no plan, bad input (docs/theory/design.md). The toy is
+tests/data/design_beam.yaml: a uniform 24 m beam of 40 t; its numbers are worked by hand
+below. The dynamic rungs are replaced by counting stand-ins where only the ladder's logic is
+under test (the rungs themselves are flexlift's own contingency and sweep code)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from flexlift import load_scenario
+from flexlift.cli import main
+from flexlift.design import dynamic
+from flexlift.design.bound import lower_bound
+from flexlift.design.cache import Cache
+from flexlift.design.run import run_design
+from flexlift.design.search import Options, run_search
+from flexlift.design.space import make_space
+from flexlift.structure.hull import hull_from_scenario
+
+TOY = str(Path(__file__).parent / "data" / "design_beam.yaml")
+#: by hand: W' = 40 t (1 - 1025 / 7850), R = 1.3 W'
+WET_T = 40.0 * (1 - 1025.0 / 7850.0)
+REQUIRED_T = 1.3 * WET_T  # 45.21 t
+
+
+@pytest.fixture(scope="module")
+def toy():
+    return load_scenario(TOY)
+
+
+def test_lower_bound_by_hand(toy):
+    hull = hull_from_scenario(toy)
+    for lift_t, n in ((5.0, 10), (10.0, 5), (2.0, 23)):
+        assert n == math.ceil(REQUIRED_T / lift_t)  # the hand count
+        lb = lower_bound(toy, hull, lift_t)
+        assert lb["required_lift_t"] == pytest.approx(REQUIRED_T, rel=1e-9)
+        assert (lb["n"], lb["n_minus_1"]) == (n, n + 1)
+        assert (lb["n_minus_1"] - 1) * lift_t >= REQUIRED_T > (lb["n_minus_1"] - 2) * lift_t
+
+
+def _search(toy, folder, up_to="statics", budget=24, models=("open_parachute_5t",), **kw):
+    space = make_space(toy, models=list(models), points=(1, 6), over=(0, 6))
+    o = Options(budget=budget, population=12, up_to=up_to, **kw)
+    return run_search(toy, space, o, None, Cache(folder, o.identity(toy, space))), space
+
+
+def test_toy_optimum_found_exactly(toy, tmp_path):
+    """The fewest 5 t bags that lift with 1.3 W' after losing any one: 11 (N-1, by hand);
+    the search finds it and no candidate with fewer passes."""
+    found, _ = _search(toy, tmp_path, budget=36)
+    rows = found["rows"]
+    passed = [r for r in rows if r["passed"]]
+    assert min(r["bags"] for r in passed) == 11
+    assert all(r["bags"] >= 11 for r in passed)
+    ten = [r for r in rows if r["bags"] == 10]
+    assert all(r["rejected"]["check"] == "lift_n_minus_1" for r in ten)
+
+
+class Counting:
+    """Stand-ins for the dynamic rungs that count what reaches them."""
+
+    def __init__(self, monkeypatch):
+        self.seen = {"nominal": [], "contingency": [], "salvage": []}
+        monkeypatch.setattr(dynamic, "nominal", self.nominal)
+        monkeypatch.setattr(dynamic, "contingency", self.contingency)
+        monkeypatch.setattr(dynamic, "salvage", self.salvage)
+
+    def nominal(self, scenarios, batch=True):
+        self.seen["nominal"] += scenarios
+        return [{"passed": True, "outcome": "safe", "why": "", "gas_m3": 1.0} for _ in scenarios]
+
+    def contingency(self, sc, engine, kinds=None, stop=True):
+        self.seen["contingency"].append(sc)
+        n = len(sc.lift.bags)  # fails with one lift point, passes with more
+        ok = n > 1
+        return {"passed": ok, "cases": 4, "ran": 4, "first": None if ok else {
+            "kind": "bag_rupture", "phase": "mid", "bag": "p1_1", "outcome": "unsafe",
+            "reason": "pitch"}, "counts": {"unsafe": 0 if ok else 1, "not_achieved": 0,
+                                          "failed": 0, "incomplete": 0, "safe": 4 if ok else 3}}
+
+    def salvage(self, sc, engine, target, samples, seed, block):
+        self.seen["salvage"].append(sc)
+        return {"passed": True, "p_unsafe": {"p": 0.0, "low": 0.0, "high": 0.009, "n": 420},
+                "counts": {}, "ran": 420, "decided": "met"}
+
+
+def test_ladder_and_cache(toy, tmp_path, monkeypatch):
+    """A candidate failing its statics never reaches a dynamic rung; one failing its single
+    failures never reaches the study; a cached candidate is not run again."""
+    rungs = Counting(monkeypatch)
+    found, _ = _search(toy, tmp_path, up_to="salvage")
+    rows = found["rows"]
+    assert any(not r["statics"]["passed"] for r in rows)  # the ladder has something to stop
+    n_static_pass = len({json.dumps(r["candidate"], sort_keys=True) for r in rows
+                         if r["statics"]["passed"]})
+    assert found["calls"]["nominal"] == len(rungs.seen["nominal"]) == n_static_pass
+    layouts = {tuple(r["points_m"]) for r in rows if r["statics"]["passed"]}
+    failed = {tuple(r.get("points_m", ())) for r in rows if not r["statics"]["passed"]}
+    reached = {tuple(b.x_m for b in sc.lift.bags) for sc in rungs.seen["nominal"]}
+    assert reached <= layouts and not reached & (failed - layouts)
+    one_point = [r for r in rows if r["statics"]["passed"] and r["candidate"]["points"] == 1]
+    assert all(r["reached"] == "contingency" and not r["passed"] for r in one_point)
+    assert len(rungs.seen["salvage"]) == len({json.dumps(r["candidate"], sort_keys=True)
+                                              for r in rows if r["reached"] == "salvage"})
+    before = {k: len(v) for k, v in rungs.seen.items()}
+    again, _ = _search(toy, tmp_path, up_to="salvage")  # same seed, same cache
+    assert {k: len(v) for k, v in rungs.seen.items()} == before
+    assert again["calls"] == {"statics": 0, "nominal": 0, "contingency": 0, "salvage": 0}
+    assert [r["candidate"] for r in again["rows"]] == [r["candidate"] for r in rows]
+
+
+def test_resume_after_interrupt_same_plan(toy, tmp_path):
+    space = make_space(toy, models=["open_parachute_5t", "open_parachute_10t"],
+                       points=(1, 6), over=(0, 6))
+    o = Options(budget=36, population=12, up_to="statics")
+    whole = run_design(toy, space, o, tmp_path / "whole", compare=False)
+
+    def stop(done, total, passed):
+        if done >= 12:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_design(toy, space, o, tmp_path / "cut", progress=stop, compare=False)
+    lines = (tmp_path / "cut" / "evaluations.jsonl").read_text().splitlines()
+    assert 0 < len(lines) <= 12
+    resumed = run_design(toy, space, o, tmp_path / "cut", compare=False)
+    assert resumed["evaluations"]["cache_hits"] >= len(lines)
+    assert resumed["best"] == whole["best"] and resumed["pareto"] == whole["pareto"]
+    assert (tmp_path / "cut" / "plan.yaml").read_text() == (
+        tmp_path / "whole" / "plan.yaml").read_text()
+
+
+def test_plan_yaml_runs_unchanged(toy, tmp_path):
+    from flexlift.ascent import simulate
+    from flexlift.sweep.spec import parse_spec
+
+    space = make_space(toy, models=["open_parachute_5t"], points=(2, 4), over=(1, 3))
+    s = run_design(toy, space, Options(budget=12, population=12, up_to="statics"),
+                   tmp_path / "out", compare=False)
+    path = tmp_path / "out" / "plan.yaml"
+    plan = load_scenario(path)
+    assert sum(b.count for b in plan.lift.bags) == s["best"]["bags"]
+    assert [b.x_m for b in plan.lift.bags] == [p["x_m"] for p in s["best"]["points"]]
+    res = simulate(plan, duration=5.0)
+    assert len(res.criteria) > 0
+    spec = parse_spec({"base": str(path), "study": "salvage", "monte_carlo": {"samples": 3}})
+    assert spec.n_cases == 3
+    head = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert set(head) >= {"best", "pareto", "lower_bound", "evaluations", "elapsed_s"}
+    assert (tmp_path / "out" / "candidates.csv").read_text().count("\n") == 13
+
+
+def test_no_plan_on_a_wreck_no_bag_can_lift(tmp_path, capsys):
+    """1,000 t on a 24 m x 6 m hull: 50 t bags one across need ~80 m of hull; every
+    candidate fails its statics, the answer says so (exit 1, no plan.yaml)."""
+    heavy = tmp_path / "heavy.yaml"
+    heavy.write_text(Path(TOY).read_text().replace("displacement_t: 40.0",
+                                                   "displacement_t: 1000.0"))
+    code = main(["design", str(heavy), "--bags", "open_parachute_50t,open_parachute_35t",
+                 "--up-to", "statics", "--budget", "12", "--out", str(tmp_path / "o"),
+                 "--json", "--no-compare"])
+    s = json.loads(capsys.readouterr().out)
+    assert code == 1 and not s["found"] and s["best"] is None
+    assert not (tmp_path / "o" / "plan.yaml").exists()
+    assert s["no_plan"]["rejected_at"] == {"statics": 12}
+    assert s["no_plan"]["what_would_change_it"] and s["no_plan"]["best_candidates"]
+
+
+@pytest.mark.parametrize("extra", [["--target", "0"], ["--target", "1.5"], ["--budget", "0"],
+                                   ["--bags", "no_such_bag"], ["--points", "5..2"],
+                                   ["--span", "20,10"], ["--objectives", "cost"],
+                                   ["--bags", ","]])
+def test_bad_input_exit_2(extra, tmp_path, capsys):
+    code = main(["design", TOY, "--out", str(tmp_path / "o"), "--up-to", "statics", *extra])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "error" in err
+    assert not (tmp_path / "o").exists()
