@@ -2,18 +2,17 @@
 :mod:`flexlift.control.controller` (the same compiled sample the simulation runs, no copy),
 fed each control period from the :class:`~flexlift.live.board.Board`.
 
-What the laws take, from what the bags report
-(docs/reference/live.md#the-master-controller):
+What the laws take, from what the bags report, through a Kalman filter per bag
+(:class:`~flexlift.live.track.BagTrack`; docs/reference/live.md#the-master-controller):
 
-- height z [m] above the bag point's start: the first depth reading minus the present one
-  (the pressure gauge of the bag's lift point);
-- upward speed [m/s]: the board's slope of the depths over its window;
-- gas volume V [m^3]: the load cell, the sling force being the bag's buoyancy (its drag at
-  the ascent's speeds is below a thousandth of it): V = F / (rho g), low-passed
-  (:data:`VOLUME_GAIN`), the inverse of
-  :func:`flexlift.physics.gas.buoyancy`;
-- separated: the bag point has risen :data:`SEPARATED_RISE_M` (the plant's own moment of
-  separation is not on the network).
+- height z [m] above the bag point's rest level (the mean depth of its pressure gauge while
+  held), and upward speed [m/s]: the filter's, predicted to the control sample;
+- gas volume V [m^3]: the filter's, from the load cell, the sling force being the bag's
+  buoyancy (its drag at the ascent's speeds is below a thousandth of it): V = F / (rho g),
+  the inverse of :func:`flexlift.physics.gas.buoyancy`;
+- separated: the filtered bag point has risen
+  :data:`~flexlift.live.track.SEPARATED_RISE_M` above its rest level (the plant's own moment
+  of separation is not on the network).
 """
 
 from __future__ import annotations
@@ -23,14 +22,9 @@ import numpy as np
 from flexlift.ascent.plant import coupled_plant
 from flexlift.control.build import controller_for, fuzzy_maps
 from flexlift.control.controller import sample
+from flexlift.live.track import BagTrack
 from flexlift.physics.gas import buoyancy
-
-#: a bag point risen this far above its start has separated from the seabed [m]
-SEPARATED_RISE_M = 0.1
-#: the volume from the load cell is low-passed, this gain per control sample: a reading held
-#: between samples steps by its noise (5 kN, 0.5 m^3) once a second, which the deficit's rate
-#: in the fill law would take as a fast change
-VOLUME_GAIN = 0.1
+from flexlift.scenario.sensors import DEFAULT_FOR_LOG
 
 
 class Master:
@@ -44,32 +38,35 @@ class Master:
         self.period = float(self.controllers.period)
         self.rho_g = float(self.plant.records.bags.rho_g)
         nc = len(self.bags)
-        self.depth0 = np.full(nc, np.nan)
+        depth_sd, force_sd = reading_noise(scenario)
+        self.tracks = [BagTrack(depth_sd, force_sd / buoyancy(1.0, self.rho_g))
+                       for _ in range(nc)]
         self.separated = np.zeros(nc, dtype=np.bool_)
         self._z, self._zd, self._V = np.zeros(nc), np.zeros(nc), np.zeros(nc)
 
-    def inputs(self, board) -> bool:
-        """The laws' inputs from ``board``; False while some controlled bag has no depth or
-        sling force yet (then nothing is commanded)."""
+    def inputs(self, board, t: float) -> bool:
+        """The laws' inputs at lift time ``t`` [s] from ``board``; False while some
+        controlled bag has no depth or sling force yet (then nothing is commanded)."""
         for j, bag in enumerate(self.bags):
-            depth = board.value(bag, "depth")
-            force = board.value(bag, "sling_force")
+            depth = board.last.get(f"{bag}/depth")
+            force = board.last.get(f"{bag}/sling_force")
             if depth is None or force is None:
                 return False
-            first = bool(np.isnan(self.depth0[j]))
-            if first:
-                self.depth0[j] = depth
-            self._z[j] = self.depth0[j] - depth
-            self._zd[j] = board.speed(bag) or 0.0
-            volume = max(force, 0.0) / buoyancy(1.0, self.rho_g)
-            self._V[j] = volume if first else self._V[j] + VOLUME_GAIN * (volume - self._V[j])
-            self.separated[j] |= self._z[j] > SEPARATED_RISE_M
+            track = self.tracks[j]
+            volume = max(force[1], 0.0) / buoyancy(1.0, self.rho_g)
+            if track.t is None:
+                track.start(min(depth[0], force[0]), depth[1], volume)
+            for t_d, d in board.heights[bag]:  # every depth since the last sample, in order
+                track.depth(t_d, d)
+            track.volume(force[0], volume)
+            self._z[j], self._zd[j], self._V[j], _ = track.now(t)
+            self.separated[j] = track.separated
         return True
 
     def step(self, t: float, board) -> dict | None:
         """One control sample at lift time ``t`` [s]: {bag: (fill [m^3/s], opening [-])},
         or None when the inputs are not all there."""
-        if not self.inputs(board):
+        if not self.inputs(board, t):
             return None
         sample(t, self._z, self._zd, self._V, self.separated, self.controllers, self.state)
         return {bag: (float(self.state.fill[j]), float(self.state.opening[j]))
@@ -78,3 +75,12 @@ class Master:
     def heights(self) -> dict:
         """The heights [m] of the last sample, by bag."""
         return dict(zip(self.bags, self._z.tolist()))
+
+
+def reading_noise(scenario) -> tuple[float, float]:
+    """(depth [m], sling force [N]) standard deviations of the lift's gauges: its
+    ``sensors:`` section's, else that section's defaults."""
+    section = scenario.sensors if scenario.sensors is not None else DEFAULT_FOR_LOG
+    spec = {q: getattr(section, q) or getattr(DEFAULT_FOR_LOG, q)
+            for q in ("depth", "sling_force")}
+    return spec["depth"].noise_si(), spec["sling_force"].noise_si()
