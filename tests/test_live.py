@@ -1,7 +1,7 @@
 """Live operation through a real Mosquitto (issue 42): the master controller driving the rig
 with the broker restarted midway and hostile messages; ``kill -9`` of live and its log read
 back; ``live --rig`` on the embedded broker end to end. (The tanker lifted safe by the master
-via the rig is not tested: it is not achieved yet, docs/reference/live.md.)"""
+via the rig is not tested: it is not achieved, docs/reference/live.md#what-it-achieves.)"""
 
 import json
 import os
