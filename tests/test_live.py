@@ -227,3 +227,45 @@ def test_the_rig_applies_each_command_once_and_never_an_older_one(tanker):
     assert cs.fill[rig.index["bag_1"]] == pytest.approx(0.1)
     assert cs.opening[rig.index["bag_2"]] == pytest.approx(0.5)
     assert cs.fill[rig.index["bag_2"]] == 0.0 and cs.opening[rig.index["bag_1"]] == 0.0
+
+
+def test_live_serves_the_dashboard_with_the_lift_as_read(tmp_path):
+    """``live --rig`` serves the dashboard (a free port, printed): while the lift runs, its
+    snapshot holds every bag of the scenario with the depths read and a state at a glance."""
+    pytest.importorskip("flexlift.sensors.tap")
+    import queue
+    import urllib.request
+
+    from flexlift.live.dashboard import STATES
+
+    proc = _flexlift("live", str(_scenario_file(tmp_path)), "--rig", "--speed", "20",
+                     "--out", str(tmp_path / "out"), "--until", "600", "--no-plan",
+                     "--lift", "tk")
+    lines: queue.Queue = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()
+    seen = []
+    try:
+        url, deadline = None, time.monotonic() + 240.0
+        while url is None and time.monotonic() < deadline:
+            try:
+                line = lines.get(timeout=1.0)
+            except queue.Empty:
+                continue
+            if line.startswith("dashboard on "):
+                url = line.split()[-1]
+        assert url and url.startswith("http://127.0.0.1:"), "no dashboard line"
+        for _ in range(40):  # at most ~20 s
+            snap = json.loads(urllib.request.urlopen(url + "snapshot", timeout=2).read())
+            if snap and all(b["depth_m"] is not None for b in snap["bags"]):
+                seen.append(snap)
+                break
+            time.sleep(0.5)
+        proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert seen, "no snapshot with every bag's depth"
+    snap = seen[0]
+    assert [b["name"] for b in snap["bags"]] == [f"bag_{i}" for i in range(1, 8)]
+    assert snap["state"] in STATES and snap["lift"] == "tk" and snap["mode"] == "master"
+    assert 0 < min(b["depth_m"] for b in snap["bags"]) <= snap["limits"]["water_depth_m"]

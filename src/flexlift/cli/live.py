@@ -44,6 +44,11 @@ def add_parser(sub) -> None:
     p.add_argument("--control", choices=("master", "advise"), default="master")
     p.add_argument("--until", default="arrived", help="arrived (default) or a time [s]")
     p.add_argument("--rig", action="store_true", help="run the rig in this process too")
+    p.add_argument("--dashboard", type=_port, default=0, metavar="PORT",
+                   help="serve the dashboard on 127.0.0.1:PORT (default 0: a free port, "
+                        "printed at the start)")
+    p.add_argument("--no-dashboard", dest="dashboard", action="store_const", const=None,
+                   help="serve no dashboard")
     p.add_argument("--speed", type=positive_float("--speed"), default=1.0,
                    help="--rig: the rig's speed, times real time (default 1)")
     p.add_argument("--lift", default=None, help="the lift's name in the topics "
@@ -58,6 +63,18 @@ def add_parser(sub) -> None:
 def _say(line: str) -> None:
     sys.stdout.write(f"flexlift live: {line}\n")
     sys.stdout.flush()
+
+
+def _port(text: str) -> int:
+    """A TCP port 0..65535 (0: a free one), else one line and exit 2."""
+    try:
+        port = int(text)
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"--dashboard: {text!r} is not a port: give 0..65535 "
+                                         "(0: a free port)")
+    return port
 
 
 def _main(args: argparse.Namespace) -> int:
@@ -105,6 +122,11 @@ def _run(args, scenario, lift, address, log, until, folder):
     live = Live(scenario, link, log, lift, args.control, _say,
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
+    if args.dashboard is not None:
+        from flexlift.live.dashboard import Dashboard
+
+        live.dashboard = Dashboard(port=args.dashboard)
+        _say(f"dashboard on {live.dashboard.start()}")
     stop = threading.Event()
     if rig is not None:
         rig.link.start()
@@ -120,6 +142,8 @@ def _run(args, scenario, lift, address, log, until, folder):
             rig_thread.join(10)
             rig.link.stop()
         link.stop()
+        if live.dashboard is not None:
+            live.dashboard.stop()
     summary = finish_report(folder, scenario, outcome, lift, args.control, not args.no_plan,
                             rig=rig)
     return outcome, summary
