@@ -180,3 +180,20 @@ def test_bad_input_exit_2(extra, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "error" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_cache_never_writes_through_a_planted_link(tmp_path):
+    """A symbolic link where the cache goes is refused, and its target is untouched."""
+    import os
+
+    from flexlift.design.cache import Cache
+
+    target = tmp_path / "users-file.txt"
+    target.write_text("mine\n")
+    os.symlink(target, tmp_path / "evaluations.jsonl")
+    cache = Cache.__new__(Cache)
+    cache.path, cache.identity, cache.entries, cache.hits = (
+        tmp_path / "evaluations.jsonl", "x", {}, 0)
+    with pytest.raises(OSError):
+        cache.put("k", {"a": 1})
+    assert target.read_text() == "mine\n"

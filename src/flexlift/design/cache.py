@@ -44,7 +44,9 @@ class Cache:
         """Append ``result`` as one line (one write, flushed and synced)."""
         line = json.dumps({"identity": self.identity, "key": key, "result": result},
                           sort_keys=True, allow_nan=False) + "\n"
-        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+        # never through a link planted in the folder (the cache is flexlift's own file)
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
+                     | getattr(os, "O_CLOEXEC", 0), 0o666)
         try:
             os.write(fd, line.encode())
             os.fsync(fd)
