@@ -5,7 +5,8 @@ everything to ``--out``/live.sqlite, and at the end write the report of the lift
 plan's simulation. ``--until arrived`` (default) or a time [s since filling began] ends it;
 SIGINT ends it cleanly. Without ``--broker`` an embedded broker runs in the process;
 ``--rig`` runs the rig there too (``flexlift live tanker --rig``: the whole chain, one
-command).
+command). While it runs it serves the dashboard (docs/guide/dashboard.md) on 127.0.0.1
+(``--dashboard PORT``, default a free port, printed; ``--no-dashboard``: none).
 
 Exit codes: 0 when it ended as asked (arrived, the time, or SIGINT), 1 when ``--until
 arrived`` ended without arrival, 2 for bad input.
