@@ -21,6 +21,7 @@ import threading
 import time
 
 from flexlift.cli._common import add_scenario_arg, help_text, positive_float, scenario_from
+from flexlift.cli.broker import account_from, add_account_args
 from flexlift.errors import InputError
 
 
@@ -45,6 +46,7 @@ def add_parser(sub) -> None:
     p.add_argument("--control", choices=("master", "advise"), default="master")
     p.add_argument("--until", default="arrived", help="arrived (default) or a time [s]")
     p.add_argument("--rig", action="store_true", help="run the rig in this process too")
+    add_account_args(p)
     p.add_argument("--dashboard", type=_port, default=0, metavar="PORT",
                    help="serve the dashboard on 127.0.0.1:PORT (default 0: a free port, "
                         "printed at the start)")
@@ -85,6 +87,10 @@ def _main(args: argparse.Namespace) -> int:
 
     until = _until(args.until)
     address = parse_broker(args.broker) if args.broker else None
+    args.account = account_from(args)
+    if args.account[0] is not None and (address is None or args.rig):
+        raise InputError("--user", args.user, "an account is for a --broker, without --rig "
+                         "(the embedded broker has none; run flexlift rig with its own)")
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
     embedded = None
@@ -117,9 +123,10 @@ def _run(args, scenario, lift, address, log, until, folder):
 
         rig = Rig(scenario, Link(address, (), "rig"), lift, speed=args.speed)
         rig.link.topics = [rig.command_topics()]
-    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live")
+    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live", *args.account)
     if not link.start():
-        _say(f"no broker answering at {address.url} yet: waiting (reconnecting)")
+        why = f"refused ({link.refused})" if link.refused else "not answering"
+        _say(f"broker at {address.url} {why} yet: waiting (reconnecting)")
     live = Live(scenario, link, log, lift, args.control, _say,
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
