@@ -3,10 +3,12 @@
 board, the valve set-points sent and the alarms raised (docs/guide/dashboard.md).
 
 The state at a glance: ``stopped`` while the readings are stale (filling stopped);
-``holding`` once every controlled bag is within the arrival tolerance of the target;
-``ascending`` when a bag rises faster than :data:`MOVING_M_S`; ``breaking out`` when a
-fill valve is open and some bag's depth has risen by :data:`MOVING_M` since the first
-reading (the hull lifting off the seabed), ``filling`` before that.
+``holding`` once every controlled bag is within the arrival tolerance of the target. Else a
+bag has *risen* once it is :data:`MOVING_M` shallower than at its first reading (the hull
+lifting off the seabed; five times a depth gauge's few centimetres of noise): ``ascending``
+once risen and the bags' mean upward speed is past :data:`MOVING_M_S` (the mean: one noisy
+gauge's 2 s slope alone passes it on the seabed), ``breaking out`` once risen with a fill
+valve open, ``filling`` before that.
 """
 
 from __future__ import annotations
@@ -45,12 +47,13 @@ def _state(live, bags: list[BagView]) -> str:
         return "stopped"
     if live.arrived():
         return "holding"
-    if any(b.speed_m_s is not None and b.speed_m_s > MOVING_M_S for b in bags):
-        return "ascending"
     for b in bags:  # each bag's first depth read: where it lay on the seabed
         if b.depth_m is not None:
             live.first_depth.setdefault(b.name, b.depth_m)
     risen = any(b.depth_m is not None and live.first_depth[b.name] - b.depth_m > MOVING_M
                 for b in bags)
+    speeds = [b.speed_m_s for b in bags if b.speed_m_s is not None]
+    if risen and speeds and sum(speeds) / len(speeds) > MOVING_M_S:
+        return "ascending"
     filling = any((b.fill or 0.0) > 0.0 for b in bags)
     return "breaking out" if risen and filling else "filling"
