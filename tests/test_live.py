@@ -171,6 +171,23 @@ def test_live_refuses_bad_options(tmp_path):
     assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--broker", "http://x"]) == 2
 
 
+def test_live_refuses_a_taken_dashboard_port_before_writing(tmp_path, capsys):
+    import socket
+
+    from flexlift.cli import main
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        port = taken.getsockname()[1]
+        assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--rig",
+                     "--dashboard", str(port)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--dashboard" in err and str(port) in err
+    assert not (tmp_path / "o").exists()
+    assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--dashboard", "70000"]) == 2
+
+
 def test_sigint_ends_live_cleanly(tmp_path):
     """SIGINT to ``live --rig``: it stops, closes its log and writes its report, exit 0."""
     pytest.importorskip("flexlift.sensors.tap")

@@ -93,15 +93,18 @@ def _main(args: argparse.Namespace) -> int:
                          "(the embedded broker has none; run flexlift rig with its own)")
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
+    board = _dashboard(args.dashboard)  # before anything is written: a taken port is refused
     embedded = None
-    if address is None:
-        embedded = EmbeddedBroker().start()
-        address = embedded.address
-        _say(f"embedded broker on {address.url}")
     try:
+        if address is None:
+            embedded = EmbeddedBroker().start()
+            address = embedded.address
+            _say(f"embedded broker on {address.url}")
         with live_folder(args.out, lift) as (folder, log):
-            outcome, summary = _run(args, scenario, lift, address, log, until, folder)
+            outcome, summary = _run(args, scenario, lift, address, log, until, folder, board)
     finally:
+        if board is not None:
+            board.stop()
         if embedded is not None:
             embedded.stop()
     _say(f"ended: {outcome.reason} at t = {outcome.t_end:.1f} s; "
@@ -110,7 +113,22 @@ def _main(args: argparse.Namespace) -> int:
         outcome.reason != "interrupted" else 0
 
 
-def _run(args, scenario, lift, address, log, until, folder):
+def _dashboard(port: int | None):
+    """The dashboard started on 127.0.0.1:``port`` (None: none); InputError if it cannot."""
+    if port is None:
+        return None
+    from flexlift.live.dashboard import Dashboard
+
+    board = Dashboard(port=port)
+    try:
+        _say(f"dashboard on {board.start()}")
+    except RuntimeError:
+        raise InputError("--dashboard", str(port), "that port cannot be served on 127.0.0.1 "
+                         "(taken?): give another, 0 for a free one, or --no-dashboard") from None
+    return board
+
+
+def _run(args, scenario, lift, address, log, until, folder, board):
     from flexlift.live.master import Master
     from flexlift.live.mqtt import Link
     from flexlift.live.run import finish_report
@@ -130,11 +148,7 @@ def _run(args, scenario, lift, address, log, until, folder):
     live = Live(scenario, link, log, lift, args.control, _say,
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
-    if args.dashboard is not None:
-        from flexlift.live.dashboard import Dashboard
-
-        live.dashboard = Dashboard(port=args.dashboard)
-        _say(f"dashboard on {live.dashboard.start()}")
+    live.dashboard = board
     stop = threading.Event()
     if rig is not None:
         rig.link.start()
@@ -150,8 +164,6 @@ def _run(args, scenario, lift, address, log, until, folder):
             rig_thread.join(10)
             rig.link.stop()
         link.stop()
-        if live.dashboard is not None:
-            live.dashboard.stop()
     summary = finish_report(folder, scenario, outcome, lift, args.control, not args.no_plan,
                             rig=rig)
     return outcome, summary
