@@ -31,6 +31,7 @@ class Link:
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.overflow = 0
         self.connected = threading.Event()
+        self._answered = threading.Event()  # the broker accepted or refused a connection
         self.connects = 0
         self._size = 0
         self._lock = threading.Lock()
@@ -48,12 +49,14 @@ class Link:
     def _on_connect(self, client, userdata, flags, reason, properties) -> None:
         if reason.is_failure:
             self.refused = str(reason)
+            self._answered.set()
             return
         self.refused = None
         for topic in self.topics:
             client.subscribe(topic, qos=QOS_COMMAND)
         self.connects += 1
         self.connected.set()
+        self._answered.set()
 
     def _on_disconnect(self, client, userdata, flags, reason, properties) -> None:
         self.connected.clear()
@@ -67,11 +70,13 @@ class Link:
         self.inbox.put((time.monotonic(), message.topic, message.payload))
 
     def start(self, wait_s: float = 10.0) -> bool:
-        """Connect (in the background; retried until the broker answers) and start the
-        network thread; whether connected within ``wait_s`` [s]."""
+        """Connect (in the background; retried until the broker answers, and after a refusal)
+        and start the network thread; whether connected within ``wait_s`` [s] (False at once
+        when the broker refuses: see ``refused``)."""
         self.client.connect_async(self.address.host, self.address.port, keepalive=5)
         self.client.loop_start()
-        return self.connected.wait(wait_s)
+        self._answered.wait(wait_s)
+        return self.connected.is_set()
 
     def drain(self, limit: int = 1_000_000) -> list[tuple[float, str, bytes]]:
         """The messages received so far (receive time [monotonic s], topic, payload)."""
