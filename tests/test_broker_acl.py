@@ -86,9 +86,10 @@ def test_the_files_written_hold_no_clear_password_and_refuse_anonymous(tmp_path)
     conf = (out / CONF).read_text()
     assert "allow_anonymous false" in conf and f"acl_file {out}/{ACL}" in conf
     assert "listener 1883 127.0.0.1" in conf and conf.count("\nlistener ") == 1
-    again = tmp_path / "c"
-    assert main(["broker", "tanker", "--lift", "tk", "--out", str(again)]) == 0
-    assert _password(again, "master") != _password(out, "master")  # new every time
+    assert stat.S_IMODE((out / PASSWORDS).stat().st_mode) == 0o700
+    before = _password(out, "master")
+    assert main(["broker", "tanker", "--lift", "tk", "--out", str(out)]) == 0  # its own folder
+    assert _password(out, "master") != before  # new every time
 
 
 def test_the_acl_grants_each_role_its_own_topics_only():

@@ -184,7 +184,7 @@ def write_broker(out, lift: str, bags, port: int = 1883, listen: str | None = No
     from pathlib import Path
 
     from flexlift.output.folders import output_folder
-    from flexlift.plumbing.atomic import write_text
+    from flexlift.plumbing.atomic import make_folders, write_text
 
     accounts = rules(lift, bags)
     final = Path(os.path.abspath(os.fspath(out)))
@@ -195,7 +195,8 @@ def write_broker(out, lift: str, bags, port: int = 1883, listen: str | None = No
         write_text(tmp / ACL, acl_text(accounts))
         write_text(tmp / PASSWD, passwd_text(passwords))
         os.chmod(tmp / PASSWD, 0o600)
-        (tmp / PASSWORDS).mkdir(mode=0o700)
+        make_folders(tmp / PASSWORDS)  # journaled: flexlift's own on the next run
+        os.chmod(tmp / PASSWORDS, 0o700)  # before any password is in it
         for user, password in passwords.items():
             write_text(tmp / PASSWORDS / user, password + "\n")
             os.chmod(tmp / PASSWORDS / user, 0o600)
