@@ -183,3 +183,50 @@ def test_a_stuck_sensor_needs_its_repeats_and_a_silent_one_its_periods():
     alarms = det.tick(t - 1 + k)
     assert [a.kind for a in alarms] == ["sensor_dropout"]
     assert alarms[0].confidence == pytest.approx(1 - 0.3 ** k)
+
+
+# ------------------------------------------------------------------ the signature table
+def _two_bags():
+    from flexlift.sensors.config import Sensor
+
+    noise = {"depth": 0.05, "sling_force": 20_000.0, "fill_flow": 0.002}
+    return [Sensor(b, q, 1.0, n, 0.0, 0.0) for b in ("a", "b") for q, n in noise.items()]
+
+
+def _synthetic(changes, seconds=40, fault_s=10):
+    """Readings of bags a and b at 1 Hz, N(prediction, noise), the prediction constant;
+    from ``fault_s`` on, ``changes[(bag, quantity)](t since the fault)`` is added to the
+    reading (not to the prediction)."""
+    from flexlift.sensors import Reading
+
+    sensors = _two_bags()
+    mean = {"depth": 350.0, "sling_force": 3.0e6, "fill_flow": 0.0}
+    rng = np.random.default_rng(5)
+    det, out = Detector(sensors, ["a", "b"]), []
+    for k in range(seconds):
+        for s in sensors:
+            z = mean[s.quantity] + rng.normal(0.0, s.noise)
+            change = changes.get((s.bag, s.quantity))
+            if change is not None and k >= fault_s:
+                z += change(k - fault_s, mean[s.quantity])
+            out += det.update(Reading(float(k), s.name, z), mean[s.quantity], s.noise)
+        out += det.tick(float(k))
+    return [(a.kind, a.bag) for a in out]
+
+
+def test_the_signatures_name_the_kind():
+    """The table of docs/theory/fault-detection.md on synthetic readings: a sling force
+    gone to zero is a broken sling unless the bag is being filled (then a rupture that
+    emptied it); a fill flow alone is a stuck-open valve; a depth gauge alone is drifting,
+    but not when another bag's gauge moves with it (the hull moved)."""
+    to_zero = lambda k, m: -m  # noqa: E731
+    filling = lambda k, m: 17.0  # noqa: E731
+    ramp = lambda k, m: -0.02 * k  # noqa: E731
+    assert _synthetic({("a", "sling_force"): to_zero}) == [("sling_break", "a")]
+    assert _synthetic({("a", "sling_force"): to_zero, ("a", "fill_flow"): filling}) == \
+        [("bag_rupture", "a")]
+    decay = lambda k, m: -m * (1 - math.exp(-(k + 1) / 5.0))  # noqa: E731
+    assert _synthetic({("b", "sling_force"): decay}) == [("bag_rupture", "b")]
+    assert _synthetic({("b", "fill_flow"): filling}) == [("fill_valve_stuck_open", "b")]
+    assert _synthetic({("a", "depth"): ramp}) == [("sensor_drift", "a")]
+    assert _synthetic({("a", "depth"): ramp, ("b", "depth"): ramp}) == []

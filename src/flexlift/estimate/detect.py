@@ -234,14 +234,17 @@ class Detector:
 
     def _drift(self, bag, tracks, t) -> Alarm | None:
         """A depth gauge whose innovation has moved while its bag's load cell and every other
-        depth gauge agree with the predictions (theory page)."""
+        depth gauge agree with the predictions (none of them has moved the same way since
+        the gauge's onset: :meth:`Track.moved`; theory page)."""
         D = self._flag(tracks, "depth", t)
         if D == 0 or self._flag(tracks, "sling_force", t) != 0:
             return None
-        for other, q in self._of_bag.items():
-            if other != bag and self._flag(q, "depth", t) == D:
-                return None
         gauge = tracks["depth"]
+        onset = gauge.cusum.onset(D)
+        for other, q in self._of_bag.items():
+            tr = q.get("depth")
+            if other != bag and tr is not None and not tr.faulty and tr.moved(D, onset):
+                return None  # the other gauge moved too: the hull moved, not the gauge
         _, last, pred = gauge.since_flag()
         return self._alarm(t, "sensor_drift", bag, [gauge],
                            f"reads {last:.2f} m, {pred:.2f} m expected", sensor=gauge.sensor.name)

@@ -12,7 +12,7 @@ KINDS = ("bag_rupture", "sling_break", "supply_failure", "sensor_drift", "sensor
 
 #: what each kind is, in a salvage master's words
 WHAT = {
-    "bag_rupture": "bag ruptured: its lift is going while it is still being filled",
+    "bag_rupture": "bag ruptured: its gas escapes, its lift is going",
     "sling_break": "sling broken: the bag no longer holds the hull",
     "supply_failure": "gas supply lost (or its fill valve stuck closed: the readings are the same)",
     "sensor_drift": "depth gauge drifting: its reading parts from the bag's load and the other gauges",

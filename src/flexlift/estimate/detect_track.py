@@ -126,6 +126,12 @@ class Track:
             return False
         return self.flag * float(np.mean(e)) > self.cusum.nu + self.z_standing / math.sqrt(len(e))
 
+    def moved(self, side: int, since: float) -> bool:
+        """Whether the innovations since ``since`` [s] lean to ``side`` beyond noise: their
+        mean times ``sqrt(n)`` past the same quantile as :meth:`standing`'s."""
+        e = [(z - m) / sd for t, z, m, sd in self.window if t >= since]
+        return bool(e) and side * sum(e) / math.sqrt(len(e)) > self.z_standing
+
     def since_flag(self) -> tuple[float, float, float]:
         """(first, last reading, last prediction) since the current flag, for a message."""
         rows = [(z, m) for t, z, m, _ in self.window if t >= self.flag_time]
