@@ -24,7 +24,6 @@ from flexlift.ascent.loop import COMMANDED
 from flexlift.ascent.result import BAG_VARS, HULL_VARS
 from flexlift.estimate.enkf import analysis
 from flexlift.estimate.ensemble import PARTS, Ensemble, Prior
-from flexlift.sensors.config import HULL
 from flexlift.sensors.truth import true_values
 
 _BAG = {name: j for j, name in enumerate(BAG_VARS)}
@@ -87,12 +86,12 @@ class Estimator:
     seed : int, optional
     prior : Prior, optional
     control : str, optional
-        The members' control mode (default the scenario's).
+        The members' control mode (default the scenario's; ``commanded``: driven by the
+        fill-flow and purge readings, docs/theory/estimation.md#ensemble).
     """
 
     def __init__(self, scenario, sensors, members: int = 24, seed: int = 0,
                  prior: Prior | None = None, control: str | None = None, plant=None):
-        control = control or drive_of(scenario, sensors, plant)
         self.ensemble = Ensemble(scenario, members, seed, prior, control, plant)
         self.sensors = sensors
         self.names = self.ensemble.plant.names
@@ -284,15 +283,6 @@ def gated(Y, z, sigma, observed) -> np.ndarray:
     with the reading's noise) of the members' mean."""
     spread = Y.std(axis=1, ddof=1)
     return observed & (np.abs(z - Y.mean(axis=1)) <= GATE * np.sqrt(spread**2 + sigma**2))
-
-
-def drive_of(scenario, sensors, plant=None) -> str | None:
-    """The members' control: ``commanded`` (driven by the valves' own readings, as the lift
-    was) when every controlled bag has a fill-flow reading; else None (the scenario's
-    controller, on the members' own state)."""
-    have = {s.bag for s in sensors if s.quantity == "fill_flow"}
-    bags = {s.bag for s in sensors if s.bag != HULL}
-    return COMMANDED if bags and bags <= have else None
 
 
 def relaxed(before: np.ndarray, after: np.ndarray, alpha: float = RELAXATION) -> np.ndarray:
