@@ -34,11 +34,14 @@ def wait_until(condition, timeout: float, step: float = 0.05) -> bool:
 class Mosquitto:
     """One Mosquitto process on 127.0.0.1:``port`` with the configuration in ``folder``."""
 
-    def __init__(self, folder: Path, port: int | None = None):
+    def __init__(self, folder: Path, port: int | None = None, conf: Path | None = None):
+        """``conf``: a configuration of its own (listening on 127.0.0.1:``port``), else an
+        open broker's is written in ``folder``."""
         self.folder, self.port = Path(folder), port or free_port()
-        self.conf = self.folder / "mosquitto.conf"
-        self.conf.write_text(f"listener {self.port} 127.0.0.1\nallow_anonymous true\n"
-                             "persistence false\nmax_queued_messages 100000\n")
+        self.conf = conf or self.folder / "mosquitto.conf"
+        if conf is None:
+            self.conf.write_text(f"listener {self.port} 127.0.0.1\nallow_anonymous true\n"
+                                 "persistence false\nmax_queued_messages 100000\n")
         self.proc: subprocess.Popen | None = None
 
     @property

@@ -171,6 +171,23 @@ def test_live_refuses_bad_options(tmp_path):
     assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--broker", "http://x"]) == 2
 
 
+def test_live_refuses_a_taken_dashboard_port_before_writing(tmp_path, capsys):
+    import socket
+
+    from flexlift.cli import main
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        port = taken.getsockname()[1]
+        assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--rig",
+                     "--dashboard", str(port)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--dashboard" in err and str(port) in err
+    assert not (tmp_path / "o").exists()
+    assert main(["live", "tanker", "--out", str(tmp_path / "o"), "--dashboard", "70000"]) == 2
+
+
 def test_sigint_ends_live_cleanly(tmp_path):
     """SIGINT to ``live --rig``: it stops, closes its log and writes its report, exit 0."""
     pytest.importorskip("flexlift.sensors.tap")
@@ -227,3 +244,59 @@ def test_the_rig_applies_each_command_once_and_never_an_older_one(tanker):
     assert cs.fill[rig.index["bag_1"]] == pytest.approx(0.1)
     assert cs.opening[rig.index["bag_2"]] == pytest.approx(0.5)
     assert cs.fill[rig.index["bag_2"]] == 0.0 and cs.opening[rig.index["bag_1"]] == 0.0
+
+
+def test_live_serves_the_dashboard_with_the_lift_as_read(tmp_path):
+    """``live --rig`` serves the dashboard (a free port, printed as ``flexlift live: dashboard
+    on URL``): while the lift runs, its snapshot holds every bag of the scenario with the
+    depths read and a state at a glance; SIGINT ends live and closes the dashboard's port."""
+    pytest.importorskip("flexlift.sensors.tap")
+    import queue
+    import socket
+    import urllib.parse
+    import urllib.request
+
+    from flexlift.live.dashboard import STATES
+
+    err = tmp_path / "stderr.txt"
+    with open(err, "w") as stderr:
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "flexlift", "live", str(_scenario_file(tmp_path)), "--rig",
+             "--speed", "20", "--out", str(tmp_path / "out"), "--until", "6000", "--no-plan",
+             "--lift", "tk"], env=env, stdout=subprocess.PIPE, stderr=stderr, text=True)
+    lines: queue.Queue = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(x) for x in proc.stdout], daemon=True).start()
+    out, seen = [], []
+    try:
+        url, deadline = None, time.monotonic() + 240.0  # room for a cold numba compile
+        while url is None and time.monotonic() < deadline and proc.poll() is None:
+            try:
+                out.append(lines.get(timeout=1.0))
+            except queue.Empty:
+                continue
+            if out[-1].startswith("flexlift live: dashboard on "):
+                url = out[-1].split()[-1]
+        assert url and url.startswith("http://127.0.0.1:"), ("no dashboard line", out,
+                                                             err.read_text()[-2000:])
+        for _ in range(40):  # at most ~20 s
+            snap = json.loads(urllib.request.urlopen(url + "snapshot", timeout=2).read())
+            if snap and all(b["depth_m"] is not None for b in snap["bags"]):
+                seen.append(snap)
+                break
+            time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+    assert proc.returncode == 0, err.read_text()[-2000:]
+    assert seen, "no snapshot with every bag's depth"
+    snap = seen[0]
+    assert [b["name"] for b in snap["bags"]] == [f"bag_{i}" for i in range(1, 8)]
+    assert snap["state"] in STATES and snap["lift"] == "tk" and snap["mode"] == "master"
+    assert 0 < min(b["depth_m"] for b in snap["bags"]) <= snap["limits"]["water_depth_m"]
+    port = urllib.parse.urlsplit(url).port
+    with pytest.raises(OSError), socket.create_connection(("127.0.0.1", port), timeout=1):
+        pass  # the dashboard stopped with live

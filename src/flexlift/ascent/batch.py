@@ -25,7 +25,7 @@ from flexlift.ascent.result import Result
 from flexlift.ascent.state import RET_NEED_U
 from flexlift.errors import SimulationError
 
-__all__ = ["run_batch"]
+__all__ = ["advance_batch", "run_batch"]
 
 
 def run_batch(runs: list[Ascent], summary_only: bool = True) -> list[Result | SimulationError]:
@@ -49,12 +49,7 @@ def run_batch(runs: list[Ascent], summary_only: bool = True) -> list[Result | Si
     """
     for run in runs:
         run.start()
-    active = list(range(len(runs)))
-    while active:
-        stops = {i: runs[i].next_stop() for i in active}
-        active = [i for i in active if stops[i] is not None]
-        codes = _advance_together(runs, {i: stops[i] for i in active})
-        active = [i for i in active if not runs[i].after_chunk(codes[i])]
+    advance_batch(runs)
     out: list[Result | SimulationError] = []
     for run in runs:
         try:
@@ -62,6 +57,29 @@ def run_batch(runs: list[Ascent], summary_only: bool = True) -> list[Result | Si
         except SimulationError as error:
             out.append(error)
     return out
+
+
+def advance_batch(runs: list[Ascent], until: int | None = None,
+                  ended: list[bool] | None = None) -> list[bool]:
+    """Advance every started run of ``runs`` (:meth:`~flexlift.ascent.loop.Ascent.start`)
+    to step ``until`` (exclusive; default: to its end), together, chunk by chunk; returns,
+    per run, whether it has ended (a stop, its last step). Runs flagged in ``ended`` are
+    left as they are. An estimator advances its ensemble from one set of readings to the
+    next so: ``until`` one past the step of the readings' row."""
+    done = [False] * len(runs) if ended is None else list(ended)
+    active = [i for i in range(len(runs)) if not done[i]]
+    while active:
+        stops = {i: runs[i].next_stop(until) for i in active}
+        for i in active:
+            if stops[i] is None and runs[i].state.counters[0] > runs[i].settings.n_steps:
+                done[i] = True
+        active = [i for i in active if stops[i] is not None]
+        codes = _advance_together(runs, {i: stops[i] for i in active})
+        for i in list(active):
+            if runs[i].after_chunk(codes[i]):
+                done[i] = True
+                active.remove(i)
+    return done
 
 
 def _advance_together(runs: list[Ascent], stops: dict[int, int]) -> dict[int, int]:

@@ -14,6 +14,7 @@ numerics fail.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -274,17 +275,19 @@ class Ascent:
                    or self.force_noise.on or self.meas_noise.on)
         self._chunk = CHUNK_STEPS if between else QUIET_CHUNK_STEPS
 
-    def next_stop(self) -> int | None:
+    def next_stop(self, until: int | None = None) -> int | None:
         """Apply the faults due, draw the next chunk's noise and room in the record; the step
-        the next chunk runs to (exclusive), or None once the run is past its last step."""
+        the next chunk runs to (exclusive; at most ``until``), or None once the run is past
+        its last step (or at ``until``)."""
         settings, state = self.settings, self.state
-        if state.counters[0] > settings.n_steps:
-            return None
         k = int(state.counters[0])
+        if k > settings.n_steps or (until is not None and k >= until):
+            return None
         while self._fi < len(self.faults) and fault_step(self.faults[self._fi], settings.dt) <= k:
             self._fault(self.faults[self._fi], k * settings.dt)
             self._fi += 1
-        k_stop = min(k + self._chunk, settings.n_steps + 1)
+        k_stop = min(k + self._chunk, settings.n_steps + 1,
+                     settings.n_steps + 1 if until is None else until)
         if self._fi < len(self.faults):
             k_stop = min(k_stop, max(fault_step(self.faults[self._fi], settings.dt), k + 1))
         self._noise(k, k_stop)
@@ -381,7 +384,7 @@ class Ascent:
 
     def command(self, bag: int, fill: float | None = None, opening: float | None = None) -> None:
         """Commanded mode: set the valves of controlled bag ``bag`` (index among
-        ``controllers.bags``) between chunks: ``fill`` [m^3/s of free air] and purge
+        ``controllers.bags``) between chunks: ``fill`` [m^3/s at the bag's pressure] and purge
         ``opening`` [-]; None leaves a valve where it is. Ends a held block of step control
         (the valves act from the next step, as :meth:`_fault` does)."""
         if self.mode != COMMANDED:
@@ -391,8 +394,28 @@ class Ascent:
             cs.fill[bag] = min(max(float(fill), 0.0), self.controllers.fill_max)
         if opening is not None:
             cs.opening[bag] = min(max(float(opening), 0.0), 1.0)
+        self.end_held_block()
+
+    def end_held_block(self) -> None:
+        """End a held block of step control (:func:`flexlift.ascent.kernel.held_block`): the
+        steps from here are base steps, the force extrapolation restarts. For a change made
+        to the run between chunks (a command, an estimator's update of the state)."""
         if self.state.counters[1] & F_HELD:
             self.state.counters[1] &= ~(F_HELD | F_QUIET | F_STILL | F_HAVE_B)
+
+    def fork(self) -> Ascent:
+        """A copy that runs on from here on its own: its state, switches, controller state,
+        record, faults and noise generators copied; the plant and the loop's records shared
+        (read only). For a forecast: the copy run to its end leaves this run where it is."""
+        twin = copy.copy(self)
+        for name in ("state", "switches", "control_state", "recorder"):
+            value = getattr(self, name)
+            setattr(twin, name, type(value)(*[_copied(a) for a in value]))
+        twin.faults, twin.fault_events = list(self.faults), list(self.fault_events)
+        twin.force_noise, twin.meas_noise = (copy.deepcopy(self.force_noise),
+                                             copy.deepcopy(self.meas_noise))
+        twin._seen = list(self._seen)
+        return twin
 
     def _per_bag(self) -> None:
         """The state, switches and record with one entry per bag of the plant (each bag's
@@ -420,3 +443,8 @@ class Ascent:
             j0, j1 = k0 // settings.k_ctrl, (k1 - 1) // settings.k_ctrl
             self.switches = sw = sw._replace(meas_noise=self.meas_noise.rows(j0, j1))
             sw.chunk[1] = j0
+
+
+def _copied(value):
+    """A record field's own copy (arrays copied; numbers as they are)."""
+    return value.copy() if isinstance(value, np.ndarray) else value

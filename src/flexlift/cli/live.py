@@ -5,7 +5,8 @@ everything to ``--out``/live.sqlite, and at the end write the report of the lift
 plan's simulation. ``--until arrived`` (default) or a time [s since filling began] ends it;
 SIGINT ends it cleanly. Without ``--broker`` an embedded broker runs in the process;
 ``--rig`` runs the rig there too (``flexlift live tanker --rig``: the whole chain, one
-command).
+command). While it runs it serves the dashboard (docs/guide/dashboard.md) on 127.0.0.1
+(``--dashboard PORT``, default a free port, printed; ``--no-dashboard``: none).
 
 Exit codes: 0 when it ended as asked (arrived, the time, or SIGINT), 1 when ``--until
 arrived`` ended without arrival, 2 for bad input.
@@ -20,6 +21,7 @@ import threading
 import time
 
 from flexlift.cli._common import add_scenario_arg, help_text, positive_float, scenario_from
+from flexlift.cli.broker import account_from, add_account_args
 from flexlift.errors import InputError
 
 
@@ -44,6 +46,12 @@ def add_parser(sub) -> None:
     p.add_argument("--control", choices=("master", "advise"), default="master")
     p.add_argument("--until", default="arrived", help="arrived (default) or a time [s]")
     p.add_argument("--rig", action="store_true", help="run the rig in this process too")
+    add_account_args(p)
+    p.add_argument("--dashboard", type=_port, default=0, metavar="PORT",
+                   help="serve the dashboard on 127.0.0.1:PORT (default 0: a free port, "
+                        "printed at the start)")
+    p.add_argument("--no-dashboard", dest="dashboard", action="store_const", const=None,
+                   help="serve no dashboard")
     p.add_argument("--speed", type=positive_float("--speed"), default=1.0,
                    help="--rig: the rig's speed, times real time (default 1)")
     p.add_argument("--lift", default=None, help="the lift's name in the topics "
@@ -60,6 +68,18 @@ def _say(line: str) -> None:
     sys.stdout.flush()
 
 
+def _port(text: str) -> int:
+    """A TCP port 0..65535 (0: a free one), else one line and exit 2."""
+    try:
+        port = int(text)
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"--dashboard: {text!r} is not a port: give 0..65535 "
+                                         "(0: a free port)")
+    return port
+
+
 def _main(args: argparse.Namespace) -> int:
     from flexlift.live.broker import EmbeddedBroker, parse_broker
     from flexlift.live.messages import lift_name
@@ -67,17 +87,24 @@ def _main(args: argparse.Namespace) -> int:
 
     until = _until(args.until)
     address = parse_broker(args.broker) if args.broker else None
+    args.account = account_from(args)
+    if args.account[0] is not None and (address is None or args.rig):
+        raise InputError("--user", args.user, "an account is for a --broker, without --rig "
+                         "(the embedded broker has none; run flexlift rig with its own)")
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
+    board = _dashboard(args.dashboard)  # before anything is written: a taken port is refused
     embedded = None
-    if address is None:
-        embedded = EmbeddedBroker().start()
-        address = embedded.address
-        _say(f"embedded broker on {address.url}")
     try:
+        if address is None:
+            embedded = EmbeddedBroker().start()
+            address = embedded.address
+            _say(f"embedded broker on {address.url}")
         with live_folder(args.out, lift) as (folder, log):
-            outcome, summary = _run(args, scenario, lift, address, log, until, folder)
+            outcome, summary = _run(args, scenario, lift, address, log, until, folder, board)
     finally:
+        if board is not None:
+            board.stop()
         if embedded is not None:
             embedded.stop()
     _say(f"ended: {outcome.reason} at t = {outcome.t_end:.1f} s; "
@@ -86,7 +113,22 @@ def _main(args: argparse.Namespace) -> int:
         outcome.reason != "interrupted" else 0
 
 
-def _run(args, scenario, lift, address, log, until, folder):
+def _dashboard(port: int | None):
+    """The dashboard started on 127.0.0.1:``port`` (None: none); InputError if it cannot."""
+    if port is None:
+        return None
+    from flexlift.live.dashboard import Dashboard
+
+    board = Dashboard(port=port)
+    try:
+        _say(f"dashboard on {board.start()}")
+    except RuntimeError:
+        raise InputError("--dashboard", str(port), "that port cannot be served on 127.0.0.1 "
+                         "(taken?): give another, 0 for a free one, or --no-dashboard") from None
+    return board
+
+
+def _run(args, scenario, lift, address, log, until, folder, board):
     from flexlift.live.master import Master
     from flexlift.live.mqtt import Link
     from flexlift.live.run import finish_report
@@ -99,12 +141,14 @@ def _run(args, scenario, lift, address, log, until, folder):
 
         rig = Rig(scenario, Link(address, (), "rig"), lift, speed=args.speed)
         rig.link.topics = [rig.command_topics()]
-    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live")
+    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live", *args.account)
     if not link.start():
-        _say(f"no broker answering at {address.url} yet: waiting (reconnecting)")
+        why = f"refused ({link.refused})" if link.refused else "not answering"
+        _say(f"broker at {address.url} {why} yet: waiting (reconnecting)")
     live = Live(scenario, link, log, lift, args.control, _say,
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
+    live.dashboard = board
     stop = threading.Event()
     if rig is not None:
         rig.link.start()

@@ -16,6 +16,7 @@ import sys
 import threading
 
 from flexlift.cli._common import add_scenario_arg, help_text, positive_float, scenario_from
+from flexlift.cli.broker import account_from, add_account_args
 
 
 def add_parser(sub) -> None:
@@ -27,6 +28,7 @@ def add_parser(sub) -> None:
                    help="times real time (default 1)")
     p.add_argument("--lift", default=None, help="the lift's name in the topics "
                    "(default: the scenario's)")
+    add_account_args(p)
     p.add_argument("--wall-limit", type=positive_float("--wall-limit"), default=math.inf,
                    help="end after this many seconds of this machine's clock")
     p.set_defaults(func=_main)
@@ -39,13 +41,15 @@ def _main(args: argparse.Namespace) -> int:
     from flexlift.live.rig import Rig
 
     address = parse_broker(args.broker)
+    account = account_from(args)
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
-    link = Link(address, (), "rig")
+    link = Link(address, (), "rig", *account)
     rig = Rig(scenario, link, lift, speed=args.speed)
     link.topics = [rig.command_topics()]
     if not link.start():
-        sys.stdout.write(f"flexlift rig: no broker at {address.url} yet: reconnecting\n")
+        why = f"refused ({link.refused})" if link.refused else "not answering"
+        sys.stdout.write(f"flexlift rig: broker at {address.url} {why} yet: reconnecting\n")
     sys.stdout.write(f"flexlift rig: lift {lift} on {address.url} at {args.speed:g}x, "
                      f"{len(rig.tap.sensors)} sensors\n")
     sys.stdout.flush()

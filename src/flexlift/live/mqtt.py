@@ -19,20 +19,27 @@ QUEUE_MAX = 200_000
 
 
 class Link:
-    """One connection to the broker at ``address`` subscribed to ``topics``."""
+    """One connection to the broker at ``address`` subscribed to ``topics``; as ``username``
+    with ``password`` on a broker with accounts (docs/reference/live.md#the-lifts-broker).
+    ``refused`` is the broker's reason when it refused the last connection, else None."""
 
-    def __init__(self, address, topics=(), name: str = "flexlift"):
+    def __init__(self, address, topics=(), name: str = "flexlift", username: str | None = None,
+                 password: str | None = None):
         self.address = address
+        self.refused: str | None = None
         self.topics = list(topics)
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.overflow = 0
         self.connected = threading.Event()
+        self._answered = threading.Event()  # the broker accepted or refused a connection
         self.connects = 0
         self._size = 0
         self._lock = threading.Lock()
         self.client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2,
                                   client_id=f"{name}-{uuid.uuid4().hex[:8]}",
                                   reconnect_on_failure=True)
+        if username is not None:
+            self.client.username_pw_set(username, password)
         self.client.reconnect_delay_set(min_delay=0.2, max_delay=1.0)
         self.client.max_queued_messages_set(10_000)
         self.client.on_connect = self._on_connect
@@ -41,11 +48,15 @@ class Link:
 
     def _on_connect(self, client, userdata, flags, reason, properties) -> None:
         if reason.is_failure:
+            self.refused = str(reason)
+            self._answered.set()
             return
+        self.refused = None
         for topic in self.topics:
             client.subscribe(topic, qos=QOS_COMMAND)
         self.connects += 1
         self.connected.set()
+        self._answered.set()
 
     def _on_disconnect(self, client, userdata, flags, reason, properties) -> None:
         self.connected.clear()
@@ -59,11 +70,13 @@ class Link:
         self.inbox.put((time.monotonic(), message.topic, message.payload))
 
     def start(self, wait_s: float = 10.0) -> bool:
-        """Connect (in the background; retried until the broker answers) and start the
-        network thread; whether connected within ``wait_s`` [s]."""
+        """Connect (in the background; retried until the broker answers, and after a refusal)
+        and start the network thread; whether connected within ``wait_s`` [s] (False at once
+        when the broker refuses: see ``refused``)."""
         self.client.connect_async(self.address.host, self.address.port, keepalive=5)
         self.client.loop_start()
-        return self.connected.wait(wait_s)
+        self._answered.wait(wait_s)
+        return self.connected.is_set()
 
     def drain(self, limit: int = 1_000_000) -> list[tuple[float, str, bytes]]:
         """The messages received so far (receive time [monotonic s], topic, payload)."""
@@ -77,9 +90,10 @@ class Link:
             self._size -= len(out)
         return out
 
-    def publish(self, topic: str, payload: bytes, qos: int = QOS_READING) -> None:
-        """Publish (queued by paho while disconnected, up to its limit)."""
-        self.client.publish(topic, payload, qos=qos)
+    def publish(self, topic: str, payload: bytes, qos: int = QOS_READING):
+        """Publish (queued by paho while disconnected, up to its limit); paho's
+        ``MQTTMessageInfo`` (``wait_for_publish``: the broker has it, QoS 1)."""
+        return self.client.publish(topic, payload, qos=qos)
 
     def stop(self) -> None:
         """Disconnect and end the network thread."""

@@ -80,6 +80,8 @@ class Live:
         self.max_speed, self.max_pitch = 0.0, 0.0
         self._offset = time.time() - time.monotonic()  # monotonic -> POSIX
         self._range: dict[str, str] = {}
+        self.dashboard = None  # a started flexlift.live.dashboard.Dashboard, or None
+        self.first_depth: dict[str, float] = {}  # each bag's first depth read (live/view.py)
 
     def read(self) -> None:
         """Take every message received since the last call."""
@@ -159,6 +161,10 @@ class Live:
             self.log.alarm(time.time(), t_a, kind, source, text)
             self.say(f"t = {t_a:.1f} s: ALARM {kind} {source}: {text}")
         self._range = {}
+        if self.dashboard is not None:
+            from flexlift.live.view import snapshot_of
+
+            self.dashboard.publish(snapshot_of(self, t))
         self.log.tick()
 
     def arrived(self) -> bool:

@@ -99,16 +99,20 @@ class SensorModel:
 def sensor_faults(sensors: list[Sensor], names, column, switches, t: float) -> dict:
     """The fault state of each sensor whose bag's sensors are faulted, from the loop's
     switches (:class:`flexlift.ascent.state.Switches`, per loop bag; ``column`` the loop bag
-    of each of the plant's bags) at time ``t`` [s]."""
+    of each of the plant's bags) during rows from time ``t`` [s] on. A dropout is silent
+    until its ``frozen_until`` also when the loop has already cleared ``frozen`` (it does at
+    that time, which may be before the chunk's end)."""
     index = {name: k for k, name in enumerate(names)}
     out = {}
     for k, s in enumerate(sensors):
         if s.bag == HULL:
             continue
         j = int(column[index[s.bag]])
-        if switches.frozen[j]:
-            until = float(switches.frozen_until[j])
-            out[k] = ("stuck",) if math.isinf(until) else ("silent", until)
+        until = float(switches.frozen_until[j])
+        if switches.frozen[j] and math.isinf(until):
+            out[k] = ("stuck",)
+        elif math.isfinite(until) and until > t:
+            out[k] = ("silent", until)
         elif switches.drift[j] != 0.0:
             out[k] = ("drift", float(switches.drift[j]), float(switches.drift_t0[j]))
     return out

@@ -63,7 +63,7 @@ class SensorTap:
                                  rec, self._row, r1, run.switches.supply)
             t = rec.t[self._row:r1]
             faults = sensor_faults(self.sensors, run.plant.names, cl.of_bag, run.switches,
-                                   float(t[-1]))
+                                   float(t[0]))
             self.model.add_rows(t.copy(), values, faults)
             self._row = r1
         now = math.inf if final else float(run.state.counters[0]) * run.settings.dt

@@ -1,0 +1,214 @@
+"""The estimator's ensemble: members that are runs of the compiled loop on one plant
+(docs/theory/estimation.md#ensemble).
+
+Each member is an :class:`~flexlift.ascent.loop.Ascent` of the scenario on the one plant
+built for all of them (``prepare(..., plant=plant)``); the members differ only in what is
+unknown: the submerged weight (a factor on the plant's wet-weight records, which each member
+holds its own copy of), the holding force left (``state.H``), each bag's gas
+(``state.n``) and each bag's leak rate (``switches.leak``, [1/s]: a ruptured bag's escape).
+All members advance together, one compiled call per chunk
+(:func:`flexlift.ascent.batch.advance_batch`). Their state is read into and written from
+columns of named parts (:data:`PARTS`) for the filter's update.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from filterpy.monte_carlo import systematic_resample
+
+from flexlift.ascent import kernel
+from flexlift.ascent.batch import advance_batch
+from flexlift.ascent.loop import Ascent, prepare
+from flexlift.ascent.plant import coupled_plant
+
+#: the parts of a member's column, in order: the loop's state fields (modal coordinates and
+#: rates, gas [mol], holding force [N]), the leak rates [1/s] and the weight factor [-]
+PARTS = ("q", "v", "n", "H", "leak", "weight")
+
+
+@dataclass(frozen=True)
+class Prior:
+    """What is not known before the lift, as standard deviations about the scenario's
+    values (assumed; docs/theory/estimation.md#prior): ``weight`` and ``holding`` relative
+    [-], ``gas`` relative per bag [-], ``leak`` per bag [1/s] (a half-normal: no bag leaks
+    gas in, a leak never goes below 0)."""
+
+    weight: float = 0.03
+    holding: float = 0.25
+    gas: float = 0.02
+    leak: float = 1.0e-5
+
+
+class Ensemble:
+    """``members`` runs of ``scenario`` under its own control mode (or ``control``) on one
+    plant, their unknowns drawn from ``prior`` with ``seed``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    members : int
+    seed : int
+    prior : Prior
+    control : str, optional
+        The members' control mode (default the scenario's).
+    plant : Plant, optional
+        Built from the scenario when not given.
+    """
+
+    def __init__(self, scenario, members: int = 24, seed: int = 0,
+                 prior: Prior | None = None, control: str | None = None, plant=None):
+        if members < 2:
+            raise ValueError(f"an ensemble needs at least 2 members, not {members}")
+        self.scenario = scenario
+        self.prior = prior or Prior()
+        self.plant = plant if plant is not None else coupled_plant(scenario)
+        length = float(scenario.simulation.run_length_s)
+        self.runs: list[Ascent] = [prepare(scenario, control, length, plant=self.plant,
+                                           share=False) for _ in range(members)]
+        base = self.runs[0].records
+        self._base = (base.modal.weight_force.copy(), base.bags.corr_weight.copy(),
+                      base.bags.slope_weight.copy(), base.seabed.group_weight.copy())
+        for run in self.runs:
+            run.records = _own_weight(run.records)
+        self.weight = np.ones(members)
+        self._draw(np.random.default_rng(seed))
+        for run in self.runs:
+            run.start()
+        self.ended = [False] * members
+        run = self.runs[0]
+        self.sizes = {"q": run.state.q.size, "v": run.state.v.size, "n": run.state.n.size,
+                      "H": run.state.H.size, "leak": run.switches.leak.size, "weight": 1}
+
+    @property
+    def m(self) -> int:
+        return len(self.runs)
+
+    @property
+    def dt(self) -> float:
+        return self.runs[0].settings.dt
+
+    @property
+    def step(self) -> int:
+        """The step the members stand at (all alike)."""
+        return int(self.runs[0].state.counters[0])
+
+    def _draw(self, rng: np.random.Generator) -> None:
+        p, H0 = self.prior, self.plant.seabed.H0
+        for i, run in enumerate(self.runs):
+            self.weight[i] = 1.0 + p.weight * rng.standard_normal()
+            run.state.H[:] = H0 * max(1.0 + p.holding * rng.standard_normal(), 0.0)
+            run.state.n[:] *= 1.0 + p.gas * rng.standard_normal(run.state.n.size)
+            run.switches.leak[:] = np.abs(p.leak * rng.standard_normal(run.switches.leak.size))
+            self._set_weight(i)
+            kernel.initial_equilibrium(run.inputs())  # at rest under their own loads
+
+    def _set_weight(self, i: int) -> None:
+        records, f = self.runs[i].records, self.weight[i]
+        wf, cw, sw, gw = self._base
+        records.modal.weight_force[:] = wf * f
+        records.bags.corr_weight[:] = cw * f
+        records.bags.slope_weight[:] = sw * f
+        records.seabed.group_weight[:] = gw * f
+
+    def advance(self, until: int) -> None:
+        """Every member to step ``until`` (exclusive) together."""
+        self.ended = advance_batch(self.runs, until, self.ended)
+
+    def columns(self) -> np.ndarray:
+        """The members' columns (n, m) in the order of :data:`PARTS`."""
+        return np.column_stack([np.concatenate([
+            run.state.q, run.state.v, run.state.n, run.state.H, run.switches.leak,
+            [self.weight[i]]]) for i, run in enumerate(self.runs)])
+
+    def write(self, X: np.ndarray) -> None:
+        """The members set from columns ``X`` (after the filter's update): gas, holding force
+        and leak kept at or above 0, the weight factor above 0; a held block ended."""
+        for i, run in enumerate(self.runs):
+            parts = self.split(X[:, i])
+            run.state.q[:] = parts["q"]
+            run.state.v[:] = parts["v"]
+            run.state.n[:] = np.maximum(parts["n"], 0.0)
+            run.state.H[:] = np.where(run.state.sep, run.state.H, np.maximum(parts["H"], 0.0))
+            run.switches.leak[:] = np.maximum(parts["leak"], 0.0)
+            self.weight[i] = max(float(parts["weight"][0]), 0.05)
+            self._set_weight(i)
+            run.end_held_block()
+
+    def resample(self, log_weights: np.ndarray, rng: np.random.Generator,
+                 force: bool = False, discount: float = 0.98) -> bool:
+        """Resample the members by their readings' likelihoods (``log_weights``) when the
+        effective ensemble size falls below half the members, or when ``force``d (filterpy's
+        systematic resampling); a member drawn twice runs on as a fork
+        (:meth:`~flexlift.ascent.loop.Ascent.fork`). The unknowns no reading sees directly
+        (the weight factor, the holding force while held) are then drawn from Liu and
+        West's (2001) kernel: each shrunk towards the weighted mean by ``a`` and spread by
+        ``sqrt(1 - a^2)`` times the weighted standard deviation, ``a = (3 d - 1) / (2 d)``
+        for the ``discount`` d: their mean and spread are kept, so resampling does not
+        collapse them; each bag's gas likewise (the copies part, and the load cells' update
+        has a spread to work on). Returns whether it resampled."""
+        w = np.exp(log_weights - log_weights.max())
+        w /= w.sum()
+        if 1.0 / np.sum(w**2) >= self.m / 2 and not force:
+            return False
+        shrink = (3.0 * discount - 1.0) / (2.0 * discount)
+        spread = math.sqrt(1.0 - shrink**2)
+        H = np.array([run.state.H for run in self.runs])  # (m, ng)
+        n = np.array([run.state.n for run in self.runs])  # (m, nb)
+        kernels = {"weight": _kernel(self.weight, w), "H": _kernel(H, w), "n": _kernel(n, w)}
+        # (filterpy walks its cumulative sum past the end when rounding leaves it just
+        # below 1: the weights are given a sum a hair above 1)
+        chosen = systematic_resample(w * (1.0 + 1e-12))
+        seen: set[int] = set()
+        runs, weight, ended = [], np.empty(self.m), []
+        for slot, j in enumerate(chosen):
+            j = int(j)
+            run = self.runs[j].fork() if j in seen else self.runs[j]
+            if j in seen:
+                run.records = _own_weight(run.records)
+            seen.add(j)
+            mean, sd = kernels["weight"]
+            weight[slot] = max(shrink * self.weight[j] + (1.0 - shrink) * mean
+                               + spread * sd * rng.standard_normal(), 0.05)
+            mean, sd = kernels["H"]
+            held = ~run.state.sep
+            draw = (shrink * H[j] + (1.0 - shrink) * mean
+                    + spread * sd * rng.standard_normal(H.shape[1]))
+            run.state.H[held] = np.maximum(draw[held], 0.0)
+            mean, sd = kernels["n"]
+            run.state.n[:] = np.maximum(shrink * n[j] + (1.0 - shrink) * mean
+                                        + spread * sd * rng.standard_normal(n.shape[1]), 0.0)
+            run.end_held_block()
+            runs.append(run)
+            ended.append(self.ended[j])
+        self.runs, self.weight, self.ended = runs, weight, ended
+        for i in range(self.m):
+            self._set_weight(i)
+        return True
+
+    def split(self, column: np.ndarray) -> dict[str, np.ndarray]:
+        """A column's parts by name."""
+        out, k = {}, 0
+        for name in PARTS:
+            out[name] = column[k:k + self.sizes[name]]
+            k += self.sizes[name]
+        return out
+
+
+def _own_weight(records):
+    """The plant's records with the wet weight's arrays a member's own (copied)."""
+    modal, bags, seabed = records.modal, records.bags, records.seabed
+    return records._replace(
+        modal=modal._replace(weight_force=modal.weight_force.copy()),
+        bags=bags._replace(corr_weight=bags.corr_weight.copy(),
+                           slope_weight=bags.slope_weight.copy()),
+        seabed=seabed._replace(group_weight=seabed.group_weight.copy()))
+
+
+def _kernel(values: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The weighted mean and standard deviation over the members (axis 0) of ``values``."""
+    mean = np.tensordot(w, values, axes=1)
+    var = np.tensordot(w, (values - mean) ** 2, axes=1)
+    return mean, np.sqrt(var)

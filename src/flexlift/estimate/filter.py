@@ -1,0 +1,301 @@
+"""The lift's state from its readings: the ensemble Kalman filter on the plant
+(docs/theory/estimation.md#filter).
+
+:class:`Estimator` keeps an :class:`~flexlift.estimate.ensemble.Ensemble` of runs of the
+compiled loop. :meth:`Estimator.assimilate` takes the readings of one window (their own
+times, any order): the members advance together to the window's end, each member's
+readings are predicted from its own recorded rows by the sensors' own law
+(:func:`flexlift.sensors.truth.true_values`, interpolated at each reading's time), and the
+ETKF (:func:`flexlift.estimate.enkf.analysis`) moves the members' columns towards the
+readings. What each reading was predicted to be (mean and spread) is returned for the fault
+detector. A reading more than :data:`GATE` standard deviations from its prediction is not
+assimilated (a fault, or a sensor's own failure, must not drag the state): it is counted
+and passed on.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexlift.ascent.loop import COMMANDED
+from flexlift.ascent.result import BAG_VARS, HULL_VARS
+from flexlift.estimate.enkf import analysis
+from flexlift.estimate.ensemble import PARTS, Ensemble, Prior
+from flexlift.sensors.truth import true_values
+
+_BAG = {name: j for j, name in enumerate(BAG_VARS)}
+_HULL = {name: j for j, name in enumerate(HULL_VARS)}
+#: the quantities the filter assimilates (the others are the fault detector's)
+OBSERVED = ("depth", "pitch", "sling_force")
+#: the least standard deviation a reading is given in the update, by quantity [SI]: a
+#: sensor declared noiseless is not believed past the plant's own accuracy
+NOISE_FLOOR = {"depth": 0.02, "pitch": 2.0e-4, "sling_force": 200.0}
+#: a reading this many predicted standard deviations off is not assimilated
+GATE = 6.0
+#: a member whose motion readings are off by this many standard deviations (root mean
+#: square) has lost the lift: the members are resampled whatever their effective number
+OUTLIER = 3.0
+#: the most a lost ensemble's motion spread is widened by at one update [-]
+WIDEN_MAX = 2.0
+#: relaxation to the prior's perturbations (RTPP, Zhang et al. 2004): the members' anomalies
+#: after each update are this fraction theirs before it, the rest theirs after [-] (keeps the
+#: ensemble from collapsing; a convex mixture, so it never inflates what readings do not see)
+RELAXATION = 0.5
+
+
+@dataclass
+class Prediction:
+    """A reading and what the ensemble predicted it to be: ``mean`` and ``std`` (the
+    members' spread with the sensor's noise), ``used`` in the update or not."""
+
+    time_s: float
+    sensor: str
+    value: float
+    mean: float
+    std: float
+    used: bool
+
+
+@dataclass
+class Counts:
+    """What the estimator did with the readings it was given."""
+
+    assimilated: int = 0
+    gated: int = 0
+    not_observed: int = 0
+    late: int = 0
+    updates: int = 0
+    resampled: int = 0
+    widened: int = 0
+    by_sensor_gated: dict = field(default_factory=dict)
+
+
+class Estimator:
+    """The filter over ``sensors`` (:class:`flexlift.sensors.config.Sensor`) of
+    ``scenario``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    sensors : list of Sensor
+    members : int, optional
+        Ensemble size (default 24).
+    seed : int, optional
+    prior : Prior, optional
+    control : str, optional
+        The members' control mode (default the scenario's; ``commanded``: driven by the
+        fill-flow and purge readings, docs/theory/estimation.md#ensemble).
+    """
+
+    def __init__(self, scenario, sensors, members: int = 24, seed: int = 0,
+                 prior: Prior | None = None, control: str | None = None, plant=None):
+        self.ensemble = Ensemble(scenario, members, seed, prior, control, plant)
+        self.sensors = sensors
+        self.names = self.ensemble.plant.names
+        run = self.ensemble.runs[0]
+        self.valves = ({self.names[i]: j for j, i in enumerate(run.controllers.bags)}
+                       if control == COMMANDED else {})
+        self.by_name = {s.name: k for k, s in enumerate(sensors)}
+        self.counts = Counts()
+        self.rng = np.random.default_rng(seed + 1)
+        self.t = 0.0  # the time the members stand at [s]
+        self._row = self._row_before = 0  # the first recorded row not yet read
+
+    def assimilate(self, t_end: float, readings) -> list[Prediction]:
+        """Advance the members to ``t_end`` [s] and update them with ``readings``
+        (:class:`flexlift.sensors.log.Reading`, each with ``t_end - window < time_s <=
+        t_end``); returns each reading's prediction."""
+        ens = self.ensemble
+        ens.advance(int(round(t_end / ens.dt)) + 1)
+        self.t = t_end
+        readings = [r for r in readings if r.sensor in self.by_name]
+        if not readings:
+            return []
+        Y = self._predicted(readings)
+        noise = np.array([self.sensors[self.by_name[r.sensor]].noise for r in readings])
+        z = np.array([r.value for r in readings])
+        mean, spread = Y.mean(axis=1), Y.std(axis=1, ddof=1)
+        std = np.sqrt(spread**2 + noise**2)
+        quantity = [self.sensors[self.by_name[r.sensor]].quantity for r in readings]
+        observed = np.array([q in OBSERVED for q in quantity])
+        floor = np.array([NOISE_FLOOR.get(q, 0.0) for q in quantity])
+        sigma = np.maximum(noise, floor)
+        motion = observed & np.array([q != "sling_force" for q in quantity])
+        if motion.any():  # the members whose motion explains the readings, then the update
+            r = (z[motion, None] - Y[motion]) / sigma[motion, None]
+            worst = np.mean(r**2, axis=0) > OUTLIER**2
+            if self.ensemble.resample(-0.5 * np.minimum(r**2, GATE**2).sum(axis=0),
+                                      self.rng, force=bool(worst.any() and not worst.all())):
+                self.counts.resampled += 1
+                Y = self._predicted(readings, again=True)
+        used = gated(Y, z, sigma, observed)
+        if np.sum(motion & ~used) > 0.5 * np.sum(motion):  # every member has lost the lift
+            Y = self._widen(Y, z, sigma, motion)
+            used = observed
+        self._count(readings, observed, used)
+        if used.any():
+            self._update(readings, quantity, Y, z, sigma, used)
+            self.counts.updates += 1
+        self._command(readings, quantity)
+        return [Prediction(r.time_s, r.sensor, r.value, float(mean[k]), float(std[k]),
+                           bool(used[k])) for k, r in enumerate(readings)]
+
+    def _widen(self, Y, z, sigma, motion) -> np.ndarray:
+        """The members' motion spread widened to cover the readings when more than half of
+        them fail the gate (the whole ensemble off the lift: a separation earlier or later
+        than every member's). The anomalies of the modal coordinates and rates, and of the
+        predicted readings, are scaled by the root mean square of the normalised innovations
+        (adaptive inflation, at most :data:`WIDEN_MAX`); then every reading is assimilated.
+        Returns the predicted readings so widened."""
+        ens = self.ensemble
+        mean = Y.mean(axis=1, keepdims=True)
+        spread = Y.std(axis=1, ddof=1, keepdims=True)[:, 0]
+        ratio = (z - mean[:, 0])[motion] / np.sqrt(spread[motion] ** 2 + sigma[motion] ** 2)
+        factor = min(max(float(np.sqrt(np.mean(ratio**2))), 1.0), WIDEN_MAX)
+        X = ens.columns()
+        rows = slice(0, ens.sizes["q"] + ens.sizes["v"])
+        centre = X[rows].mean(axis=1, keepdims=True)
+        X[rows] = centre + factor * (X[rows] - centre)
+        ens.write(X)
+        self.counts.widened += 1
+        return mean + factor * (Y - mean)
+
+    def _update(self, readings, quantity, Y, z, sigma, used) -> None:
+        """The ETKF by groups of readings (serial: their noises are independent), each
+        group on the rows it may move (domain localisation, docs/theory/estimation.md#local):
+        a bag's load cell its own gas and leak; the depths and inclinometers the motion (the
+        weight and the holding force are left to resampling: their effect on the readings is
+        a threshold, separation, not a line). The
+        predicted readings of the groups still to come are updated with the rows."""
+        ens = self.ensemble
+        X = ens.columns()
+        before = X.copy()
+        groups = self._groups(readings, quantity, used)
+        rest = np.flatnonzero(used)
+        for rows, members in groups:
+            rest = np.setdiff1d(rest, members)
+            stack = np.vstack([X[rows], Y[rest]])
+            out = analysis(stack, Y[members], z[members], np.diag(sigma[members] ** 2))
+            X[rows], Y[rest] = out[: len(rows)], out[len(rows):]
+        ens.write(relaxed(before, X))
+
+    def _groups(self, readings, quantity, used) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(rows of the members' columns, readings) per group of the update."""
+        ens, index = self.ensemble, {name: j for j, name in enumerate(self.names)}
+        offset, k = {}, 0
+        for name in PARTS:
+            offset[name] = k
+            k += ens.sizes[name]
+        groups, broad = [], []
+        by_bag: dict[int, list[int]] = {}
+        for j in np.flatnonzero(used):
+            if quantity[j] == "sling_force":
+                bag = self.sensors[self.by_name[readings[j].sensor]].bag
+                by_bag.setdefault(index[bag], []).append(int(j))
+            else:
+                broad.append(int(j))
+        for b, members in by_bag.items():
+            groups.append((np.array([offset["n"] + b, offset["leak"] + b]), np.array(members)))
+        if broad:  # the motion; the weight and the hold by resampling only
+            groups.append((np.arange(offset["n"]), np.array(broad)))
+        return groups
+
+    def _command(self, readings, quantity) -> None:
+        """Commanded members: every bag's valves set to its latest fill-flow (read as free air,
+        commanded at the member's bag pressure, Boyle) and purge [-] readings, held to the
+        next window."""
+        if not self.valves:
+            return
+        latest: dict[tuple[str, str], tuple[float, float]] = {}
+        for r, q in zip(readings, quantity):
+            if q in ("fill_flow", "purge"):
+                key = (self.sensors[self.by_name[r.sensor]].bag, q)
+                if key not in latest or r.time_s >= latest[key][0]:
+                    latest[key] = (r.time_s, r.value)
+        index = {name: i for i, name in enumerate(self.names)}
+        for (bag, q), (_, value) in latest.items():
+            j = self.valves.get(bag)
+            if j is None:
+                continue
+            for run in self.ensemble.runs:
+                if q == "fill_flow":  # the meter's free air at the member's bag pressure
+                    p_atm = run.records.bags.p_atm
+                    run.command(j, fill=max(value, 0.0) * p_atm / run.state.p[index[bag]])
+                else:
+                    run.command(j, opening=value)
+
+    def _count(self, readings, observed, used) -> None:
+        c = self.counts
+        c.assimilated += int(used.sum())
+        c.not_observed += int((~observed).sum())
+        for k in np.flatnonzero(observed & ~used):
+            c.gated += 1
+            c.by_sensor_gated[readings[k].sensor] = c.by_sensor_gated.get(
+                readings[k].sensor, 0) + 1
+
+    def _predicted(self, readings, again: bool = False) -> np.ndarray:
+        """(p, m): each member's value of each reading, its rows interpolated at the
+        reading's time (``again``: the same window's once more, after resampling)."""
+        ens, times = self.ensemble, np.array([r.time_s for r in readings])
+        wanted = sorted({self.by_name[r.sensor] for r in readings})
+        sensors = [self.sensors[k] for k in wanted]
+        of = np.array([wanted.index(self.by_name[r.sensor]) for r in readings])
+        columns = [(j, np.flatnonzero(of == j)) for j in range(len(wanted))]
+        Y = np.empty((len(readings), ens.m))
+        for i, run in enumerate(ens.runs):
+            rec = run.recorder
+            r1 = int(rec.counts[0])
+            first = self._row_before if again else self._row
+            r0 = max(min(first, r1 - 1) - 1, 0)  # the row before the window as well
+            values = true_values(sensors, self.names, run.clusters.of_bag, run.records.bags,
+                                 rec, r0, r1, run.switches.supply)
+            t = rec.t[r0:r1]
+            for j, rows in columns:
+                Y[rows, i] = np.interp(times[rows], t, values[:, j])
+        if not again:
+            self._row_before, self._row = self._row, int(ens.runs[0].recorder.counts[0])
+        return Y
+
+    def state(self) -> dict[str, np.ndarray]:
+        """The members' mean and 5 / 95 % of what a user reads, now: per bag ``height`` [m]
+        and ``gas_volume`` [m^3], the hull's ``heave`` [m] and ``pitch`` [rad], the
+        ``holding_force`` [N], the ``weight_factor`` [-] and each bag's ``leak`` [1/s]."""
+        ens = self.ensemble
+        rows = {name: [] for name in ("height", "gas_volume", "heave", "pitch",
+                                      "holding_force")}
+        for run in ens.runs:
+            rec, r = run.recorder, int(run.recorder.counts[0]) - 1
+            for name in ("height", "gas_volume"):
+                rows[name].append(rec.bag[r, _BAG[name], :])
+            for name in ("heave", "pitch", "holding_force"):
+                rows[name].append(rec.hull[r, _HULL[name]:_HULL[name] + 1])
+        rows["weight_factor"] = [np.array([w]) for w in ens.weight]
+        rows["leak"] = [run.switches.leak.copy() for run in ens.runs]
+        return {name: np.percentile(np.array(v), [5, 50, 95], axis=0)
+                for name, v in rows.items()}
+
+
+def gated(Y, z, sigma, observed) -> np.ndarray:
+    """The observed readings within :data:`GATE` standard deviations (the members' spread
+    with the reading's noise) of the members' mean."""
+    spread = Y.std(axis=1, ddof=1)
+    return observed & (np.abs(z - Y.mean(axis=1)) <= GATE * np.sqrt(spread**2 + sigma**2))
+
+
+def relaxed(before: np.ndarray, after: np.ndarray, alpha: float = RELAXATION) -> np.ndarray:
+    """The members ``after`` the update, their anomalies relaxed to those ``before`` it
+    (RTPP): ``mean_a + (1 - alpha) A_a + alpha A_b``."""
+    mean = after.mean(axis=1, keepdims=True)
+    A_b = before - before.mean(axis=1, keepdims=True)
+    return mean + (1.0 - alpha) * (after - mean) + alpha * A_b
+
+
+def window_steps(scenario, window_s: float | None) -> float:
+    """The assimilation window [s]: a whole number of the loop's recorded rows, at least one
+    (default: the fastest assimilated sensor's period, at least a row)."""
+    row = scenario.simulation.output_interval_s
+    w = row if window_s is None else max(window_s, row)
+    return row * max(1, math.floor(w / row + 1e-9))

@@ -1,0 +1,157 @@
+"""The estimator's ensemble on the plant (estimate/ensemble.py, estimate/filter.py) and what
+it stands on: a run forked and stepped in windows (ascent/loop.py, ascent/batch.py)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from flexlift import load_scenario
+from flexlift.ascent.batch import advance_batch, run_batch
+from flexlift.ascent.loop import prepare
+from flexlift.ascent.plant import coupled_plant
+from flexlift.estimate.ensemble import Ensemble, Prior, _kernel
+from flexlift.estimate.filter import Estimator, relaxed
+from flexlift.sensors.config import sensors_of
+from flexlift.sensors.tap import SensorTap
+
+PULL_S = 300.0  # the tanker is held on the seabed all this time (separation at 1,877 s)
+
+
+@pytest.fixture(scope="module")
+def tanker():
+    return load_scenario("tanker")
+
+
+def _same(a, b):
+    for name in a.dataset.variables:
+        x, y = a.dataset[name].values, b.dataset[name].values
+        assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), name
+
+
+def test_a_fork_runs_on_as_the_run_itself_and_leaves_it_where_it_was(tanker):
+    run = prepare(tanker, "decentralized", 600.0, share=False)
+    run.start()
+    advance_batch([run], 2001)
+    k = int(run.state.counters[0])
+    twin = run.fork()
+    forked = run_batch_from_here(twin)
+    assert int(run.state.counters[0]) == k  # the original has not moved
+    _same(forked, run_batch_from_here(run))
+
+
+def run_batch_from_here(run):
+    advance_batch([run])
+    return run.finish(summary_only=True)
+
+
+def test_a_run_stepped_in_windows_is_the_run_in_one_go(tanker):
+    whole = run_batch([prepare(tanker, "decentralized", 400.0, share=False)])[0]
+    run = prepare(tanker, "decentralized", 400.0, share=False)
+    run.start()
+    for k in range(11, 4002, 20):  # windows of 2 s, each one past the step of its row
+        assert not advance_batch([run], k)[0]
+    _same(whole, run_batch_from_here(run))
+
+
+def test_advance_to_a_step_stops_there_and_refuses_none(tanker):
+    run = prepare(tanker, "decentralized", 10.0, share=False)
+    run.start()
+    assert advance_batch([run], 51) == [False]
+    assert int(run.state.counters[0]) == 51
+    assert advance_batch([run], 51) == [False]  # nothing left before that step
+    assert advance_batch([run]) == [True]  # to the end
+
+
+def test_the_liu_west_kernel_is_the_weighted_mean_and_spread():
+    values = np.array([[1.0, 10.0], [3.0, 30.0], [5.0, 50.0]])
+    w = np.array([0.25, 0.5, 0.25])
+    mean, sd = _kernel(values, w)
+    assert mean == pytest.approx([3.0, 30.0])
+    assert sd == pytest.approx([np.sqrt(2.0), 10 * np.sqrt(2.0)])
+
+
+def test_relaxation_to_prior_perturbations_mixes_the_anomalies():
+    rng = np.random.default_rng(1)
+    before, after = rng.normal(size=(3, 8)), rng.normal(size=(3, 8))
+    out = relaxed(before, after, 0.5)
+    assert out.mean(axis=1) == pytest.approx(after.mean(axis=1))
+    anomalies = out - out.mean(axis=1, keepdims=True)
+    want = 0.5 * (after - after.mean(axis=1, keepdims=True)) \
+        + 0.5 * (before - before.mean(axis=1, keepdims=True))
+    assert anomalies == pytest.approx(want)
+
+
+def test_the_members_differ_in_their_unknowns_only_and_share_one_plant(tanker):
+    ens = Ensemble(tanker, 6, seed=3, prior=Prior(weight=0.05, holding=0.2, gas=0.01,
+                                                   leak=1e-5), control="decentralized")
+    assert all(run.plant is ens.plant for run in ens.runs)
+    assert len({id(run.records.modal.weight_force) for run in ens.runs}) == 6  # own copies
+    assert np.std(ens.weight) > 0.0
+    H = [run.state.H[0] for run in ens.runs]
+    assert np.std(H) > 0.0
+    base = ens._base[0]
+    for i, run in enumerate(ens.runs):
+        assert run.records.modal.weight_force == pytest.approx(base * ens.weight[i])
+        assert run.records.modal.omega2 is ens.runs[0].records.modal.omega2
+
+
+def _noiseless_log(scenario, duration):
+    """The readings of a noise-free run: the sensors of --sensor-log with no noise."""
+    run = prepare(scenario, "decentralized", duration, share=False)
+    sensors = [dataclasses.replace(s, noise=0.0) for s in
+               sensors_of(scenario, run.plant.names, for_log=True)]
+    tap = SensorTap(run, sensors)
+    run.start()
+    advance_batch([run])
+    return sensors, sorted(tap.take(final=True), key=lambda r: r.time_s)
+
+
+def _replay(est, readings, window, until):
+    out, t_end, buf = [], window, []
+    for r in readings:
+        if r.time_s > until:
+            break
+        while r.time_s > t_end + 1e-9:
+            out += est.assimilate(t_end, buf)
+            buf, t_end = [], t_end + window
+        buf.append(r)
+    return out
+
+
+def test_with_the_true_unknowns_and_no_noise_the_filter_is_the_simulation(tanker):
+    sensors, readings = _noiseless_log(tanker, PULL_S)
+    est = Estimator(tanker, sensors, members=4, prior=Prior(0.0, 0.0, 0.0, 0.0),
+                    control="decentralized")
+    predictions = _replay(est, readings, 2.0, PULL_S - 2.0)
+    assert len(predictions) > 1000
+    for p in predictions:  # every member predicts every reading as it was
+        scale = max(abs(p.value), 1.0)
+        assert abs(p.value - p.mean) <= 1e-7 * scale, p
+    assert est.counts.resampled == 0 and est.counts.gated == 0
+
+
+def test_on_a_noisy_pull_the_holding_force_left_is_inside_the_band(tanker):
+    """The tanker's sensors of --sensor-log (5 kN load cells, 5 cm gauges): 900 s of the
+    pull; the truth's holding force then lies inside the members' 5-95 % band, and the
+    readings are assimilated all along (at most 1 % gated, the ensemble never lost)."""
+    import flexlift.sensors.model as model
+
+    plant = coupled_plant(tanker)
+    run = prepare(tanker, "decentralized", 900.0, plant=plant)
+    sensors = sensors_of(tanker, plant.names, for_log=True)
+    tap = SensorTap(run, sensors)
+    run.start()
+    advance_batch([run])
+    readings = sorted(tap.take(final=True), key=lambda r: r.time_s)
+    assert isinstance(tap.model, model.SensorModel)
+    truth_H = float(run.state.H[0])
+    est = Estimator(tanker, sensors, members=16, control="decentralized", plant=plant)
+    _replay(est, readings, 2.0, 898.0)
+    band = est.state()["holding_force"][:, 0]
+    assert band[0] <= truth_H <= band[2], (band, truth_H)
+    # while held nothing a sensor reads depends on the hold: its band stays the prior's
+    # (25 %: 82 % of H0 from 5 to 95 %), neither collapsed by resampling nor blown up
+    assert 0.3 * plant.seabed.H0[0] < band[2] - band[0] < 1.2 * plant.seabed.H0[0]
+    c = est.counts
+    assert c.gated <= 0.01 * c.assimilated and c.widened == 0
