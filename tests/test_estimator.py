@@ -155,3 +155,25 @@ def test_on_a_noisy_pull_the_holding_force_left_is_inside_the_band(tanker):
     assert 0.3 * plant.seabed.H0[0] < band[2] - band[0] < 1.2 * plant.seabed.H0[0]
     c = est.counts
     assert c.gated <= 0.01 * c.assimilated and c.widened == 0
+
+
+def test_with_the_true_unknowns_the_forecast_is_the_simulation(tanker):
+    """The issue's known answer: members that are the lift itself forecast the lift's own
+    separation, breakout and arrival, to the recorded precision."""
+    from flexlift.ascent import simulate
+    from flexlift.estimate.forecast import forecast
+
+    truth = simulate(tanker, control="decentralized", summary_only=True)
+    sensors, readings = _noiseless_log(tanker, 120.0)
+    est = Estimator(tanker, sensors, members=3, prior=Prior(0.0, 0.0, 0.0, 0.0),
+                    control="decentralized")
+    _replay(est, readings, 2.0, 101.0)
+    f = forecast(est)
+    assert f["time_s"] == 100.0 and f["members"] == 3
+    for key in ("separation_time_s", "breakout_time_s"):
+        band = f[key]
+        assert band["p5"] == band["p50"] == band["p95"] == truth.headline[key], key
+    last = float(np.max(truth.dataset.arrival_time.values))
+    assert f["arrival_time_s"]["p50"] == round(last, 3)  # the band is given to 1 ms
+    assert f["p_unsafe"] == 0.0
+    assert est.ensemble.step == 1001  # the forecast left the members where they were

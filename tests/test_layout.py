@@ -24,8 +24,9 @@ ALLOWED = {
     # the filter over the plant (estimate/): the loop's ensemble, the sensors' readings
     "estimate": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                  "ascent", "sensors"},
+    # (a replay's folder: output/replay.py reads the estimate's record of what it gives)
     "output": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
-               "ascent"},
+               "ascent", "sensors", "estimate"},
     "live": {"scenario", "physics", "control", "ascent", "sensors", "output"},  # rig and live
     "stages": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                "ascent", "output", "sensors"},

@@ -70,6 +70,7 @@ class Counts:
     updates: int = 0
     resampled: int = 0
     widened: int = 0
+    rejected: int = 0
     by_sensor_gated: dict = field(default_factory=dict)
 
 
@@ -168,19 +169,18 @@ class Estimator:
         group on the rows it may move (domain localisation, docs/theory/estimation.md#local):
         a bag's load cell its own gas and leak; the depths and inclinometers the motion (the
         weight and the holding force are left to resampling: their effect on the readings is
-        a threshold, separation, not a line). The
-        predicted readings of the groups still to come are updated with the rows."""
+        a threshold, separation, not a line). The groups' rows are disjoint, so each group's
+        update leaves the others' predicted readings as they were."""
         ens = self.ensemble
         X = ens.columns()
         before = X.copy()
-        groups = self._groups(readings, quantity, used)
-        rest = np.flatnonzero(used)
-        for rows, members in groups:
-            rest = np.setdiff1d(rest, members)
-            stack = np.vstack([X[rows], Y[rest]])
-            out = analysis(stack, Y[members], z[members], np.diag(sigma[members] ** 2))
-            X[rows], Y[rest] = out[: len(rows)], out[len(rows):]
-        ens.write(relaxed(before, X))
+        for rows, members in self._groups(readings, quantity, used):  # disjoint rows
+            X[rows] = analysis(X[rows], Y[members], z[members], np.diag(sigma[members] ** 2))
+        after = relaxed(before, X)
+        if not np.all(np.isfinite(after)):  # a member blown up: no update this window
+            self.counts.rejected += 1
+            return
+        ens.write(after)
 
     def _groups(self, readings, quantity, used) -> list[tuple[np.ndarray, np.ndarray]]:
         """(rows of the members' columns, readings) per group of the update."""
