@@ -164,6 +164,23 @@ def test_live_rig_embedded_end_to_end(tmp_path):
     assert (tmp_path / "out" / "report.md").read_text().startswith("# Lift tk (master)")
 
 
+def test_live_with_its_rig_ends_when_the_rig_has_ended(tmp_path):
+    """``--until arrived`` with ``--rig``: the rig's plant ends at its scenario's duration
+    (150 s, held on the seabed all along); live then reads what is left and ends
+    (``rig_ended``, exit 1: not arrived), not waiting for an arrival that cannot come."""
+    pytest.importorskip("flexlift.sensors.tap")
+    path = _scenario_file(tmp_path)
+    path.write_text(path.read_text().replace("duration_s: 6000.0", "duration_s: 150.0"))
+    proc = _flexlift("live", str(path), "--rig", "--speed", "200", "--out",
+                     str(tmp_path / "out"), "--until", "arrived", "--no-plan", "--lift", "tk",
+                     "--wall-limit", "200")
+    out, err = proc.communicate(timeout=300)
+    assert proc.returncode == 1, err
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert report["lift"]["ended"] == "rig_ended"
+    assert 140.0 <= report["lift"]["end_time_s"] <= 151.0
+
+
 def test_live_refuses_bad_options(tmp_path):
     from flexlift.cli import main
 

@@ -149,15 +149,16 @@ def _run(args, scenario, lift, address, log, until, folder, board):
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
     live.dashboard = board
-    stop = threading.Event()
+    stop, rig_done = threading.Event(), threading.Event()
     if rig is not None:
         rig.link.start()
-        rig_thread = threading.Thread(target=rig.run, args=(stop,), name="flexlift-rig",
-                                      daemon=True)
+        rig_thread = threading.Thread(target=_rig_then_say, args=(rig, stop, rig_done),
+                                      name="flexlift-rig", daemon=True)
         rig_thread.start()
     _say(f"{args.control} on {address.url}, lift {lift}: {len(master.bags)} controlled bags")
     try:
-        outcome = live.run(until, stop, epoch=time.time(), wall_limit=args.wall_limit)
+        outcome = live.run(until, stop, epoch=time.time(), wall_limit=args.wall_limit,
+                           source_ended=rig_done if rig is not None else None)
     finally:
         stop.set()
         if rig_thread is not None:
@@ -167,3 +168,12 @@ def _run(args, scenario, lift, address, log, until, folder, board):
     summary = finish_report(folder, scenario, outcome, lift, args.control, not args.no_plan,
                             rig=rig)
     return outcome, summary
+
+
+def _rig_then_say(rig, stop: threading.Event, done: threading.Event) -> None:
+    """The rig's run (``--rig``), then ``done`` set: its plant has ended, so no reading
+    will come again and live ends too (not waiting for an arrival that cannot come)."""
+    try:
+        rig.run(stop)
+    finally:
+        done.set()

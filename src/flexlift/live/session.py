@@ -37,12 +37,15 @@ from flexlift.live.mqtt import QOS_COMMAND
 SEND_FILL_FRACTION, SEND_OPENING = 0.01, 0.01
 #: the longest sleep of the loop [s of wall time] (messages are read at least this often)
 MAX_SLEEP_S = 0.05
+#: the rig run in this process has ended: the readings still on their way are read after
+#: this long of wall time [s]
+LAST_READINGS_S = 0.5
 
 
 class Outcome(NamedTuple):
     """How a live run ended and what it saw."""
 
-    reason: str  # arrived, time, interrupted, no_readings
+    reason: str  # arrived, time, interrupted, no_readings, rig_ended
     t_end: float  # lift time at the end [s]
     arrived_s: float | None
     max_speed: float  # largest upward speed of a bag seen [m/s]
@@ -175,28 +178,50 @@ class Live:
                                for h in z.values()) and not self.stale
 
     def run(self, until, stop: threading.Event, epoch: float | None = None,
-            wall_limit: float = math.inf) -> Outcome:
-        """Run until ``until`` ("arrived" or a lift time [s]), ``stop`` is set, or
-        ``wall_limit`` [s of wall time] passes; then commit the log."""
+            wall_limit: float = math.inf,
+            source_ended: threading.Event | None = None) -> Outcome:
+        """Run until ``until`` ("arrived" or a lift time [s]), ``stop`` is set,
+        ``wall_limit`` [s of wall time] passes or ``source_ended`` is set (the rig run in
+        this process has ended: ``rig_ended``, after the readings still queued are read);
+        then commit the log."""
         self.epoch = epoch if epoch is not None else time.time()
         start = time.monotonic()
         try:
-            reason = self._loop(until, stop, start, wall_limit)
+            reason = self._loop(until, stop, start, wall_limit, source_ended)
         except KeyboardInterrupt:  # SIGINT: end here, cleanly
             reason = "interrupted"
         self.log.commit()
-        return Outcome(reason, self.board.now(time.monotonic()), self.arrived_s,
+        # (the rig ended: the lift's clock stopped with its last reading)
+        t_end = self.board.t_max if reason == "rig_ended" else self.board.now(time.monotonic())
+        return Outcome(reason, t_end, self.arrived_s,
                        self.max_speed, self.max_pitch, self.board.count, self.board.late,
                        dict(Counter(self.tally.counts)), self.commands,
                        list(self.alarms.raised), self.stale_periods)
 
-    def _loop(self, until, stop, start: float, wall_limit: float) -> str:
+    def _last(self, until, stop) -> str:
+        """The rig has ended: the readings still on their way read (after
+        :data:`LAST_READINGS_S`), a last period, and the reason: ``arrived`` if every bag
+        then is at the target and arrival was awaited, else ``rig_ended``."""
+        stop.wait(LAST_READINGS_S)
+        self.read()
+        t = self.board.t_max  # the last reading's time: the lift's clock stopped with the rig
+        if math.isfinite(t):
+            self.period(t, time.monotonic())
+            if until == "arrived" and self.arrived():
+                self.arrived_s = t
+                return "arrived"
+        return "rig_ended"
+
+    def _loop(self, until, stop, start: float, wall_limit: float,
+              source_ended: threading.Event | None = None) -> str:
         t_next, reason = -math.inf, "interrupted"
         while not stop.is_set():
             wall = time.monotonic()
             if wall - start > wall_limit:
                 reason = "time" if self.board.count else "no_readings"
                 break
+            if source_ended is not None and source_ended.is_set():
+                return self._last(until, stop)
             self.read()
             t = self.board.now(time.monotonic())
             if math.isfinite(t) and t >= t_next:
