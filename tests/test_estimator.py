@@ -138,7 +138,7 @@ def test_on_a_noisy_pull_the_holding_force_left_is_inside_the_band(tanker):
     import flexlift.sensors.model as model
 
     plant = coupled_plant(tanker)
-    run = prepare(tanker, "decentralized", 900.0, plant=plant)
+    run = prepare(tanker, "decentralized", 900.0, plant=plant, share=False)
     sensors = sensors_of(tanker, plant.names, for_log=True)
     tap = SensorTap(run, sensors)
     run.start()
@@ -155,6 +155,11 @@ def test_on_a_noisy_pull_the_holding_force_left_is_inside_the_band(tanker):
     assert 0.3 * plant.seabed.H0[0] < band[2] - band[0] < 1.2 * plant.seabed.H0[0]
     c = est.counts
     assert c.gated <= 0.01 * c.assimilated and c.widened == 0
+    # every bag's gas pinned by its own load cell: the truth inside a band far narrower
+    # than the prior's (2 %: about 6.6 % of the volume from 5 to 95 %)
+    gas, truth_V = est.state()["gas_volume"], run.state.V
+    assert np.all(gas[0] <= truth_V) and np.all(truth_V <= gas[2])
+    assert np.all(gas[2] - gas[0] < 0.02 * truth_V)
 
 
 def test_with_the_true_unknowns_the_forecast_is_the_simulation(tanker):
@@ -177,3 +182,21 @@ def test_with_the_true_unknowns_the_forecast_is_the_simulation(tanker):
     assert f["arrival_time_s"]["p50"] == round(last, 3)  # the band is given to 1 ms
     assert f["p_unsafe"] == 0.0
     assert est.ensemble.step == 1001  # the forecast left the members where they were
+
+
+def test_resampling_keeps_the_unknowns_spread_and_parts_the_copies(tanker):
+    """Half the members unlikely: the other half drawn twice each, forks; the weight factor
+    and the hold then drawn from Liu and West's kernel: the weighted mean kept, no two
+    members alike, the spread about the weighted spread."""
+    ens = Ensemble(tanker, 8, seed=5, control="decentralized")
+    log_w = np.where(np.arange(8) % 2 == 0, 0.0, -50.0)
+    w = np.exp(log_w - log_w.max())
+    mean, sd = _kernel(ens.weight, w / w.sum())
+    assert ens.resample(log_w, np.random.default_rng(0), force=True)  # (ESS = m / 2)
+    assert len(set(np.round(ens.weight, 12))) == 8
+    assert len({id(run) for run in ens.runs}) == 8 and len({id(run.state) for run in ens.runs}) == 8
+    assert abs(ens.weight.mean() - mean) < 2 * sd
+    assert 0.3 * sd < ens.weight.std(ddof=1) < 3 * sd
+    for i, run in enumerate(ens.runs):  # each member's records carry its own factor
+        assert run.records.modal.weight_force == pytest.approx(ens._base[0] * ens.weight[i])
+    assert not ens.resample(np.zeros(8), np.random.default_rng(0))  # all alike: kept
