@@ -104,3 +104,17 @@ def test_a_missing_log_is_one_line_and_exit_2(tmp_path, capsys):
                  str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "none.jsonl" in err[0]
+
+
+def test_a_folder_not_flexlifts_is_refused_before_the_work(pull_log, tmp_path, capsys,
+                                                          monkeypatch):
+    import flexlift.estimate.replay as replay_module
+
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep")
+    monkeypatch.setattr(replay_module, "replay", lambda *a, **k: pytest.fail("replayed"))
+    code = main(["replay", str(pull_log), "tanker", "--out", str(mine)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "did not write" in err[0]
+    assert (mine / "notes.txt").read_text() == "keep"

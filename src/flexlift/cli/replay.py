@@ -10,6 +10,7 @@ Exit codes: 0 no alarm, 1 an alarm raised, 2 bad input.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -48,6 +49,7 @@ def add_parser(sub) -> None:
 def _main(args: argparse.Namespace) -> int:
     from flexlift.estimate.replay import Settings, replay
     from flexlift.output import output_folder
+    from flexlift.output.folders import check_target
     from flexlift.output.replay import write_replay
 
     scenario = scenario_from(args)
@@ -56,6 +58,8 @@ def _main(args: argparse.Namespace) -> int:
                         false_alarms_per_hour=args.false_alarms)
     settings.check()
     out = args.out if args.out is not None else Path("flexlift-out") / f"replay-{scenario.name}"
+    shown = str(out)
+    check_target(Path(os.path.abspath(shown)), shown)  # before minutes of work, not after
 
     shown = [-1]
 
