@@ -76,7 +76,7 @@ class Counting:
 
     def contingency(self, sc, engine, kinds=None, stop=True):
         self.seen["contingency"].append(sc)
-        n = len(sc.lift.bags)  # fails with one lift point, passes with more
+        n = sum(b.kind == "external" for b in sc.lift.bags)  # one lift point fails, more pass
         ok = n > 1
         return {"passed": ok, "cases": 4, "ran": 4, "first": None if ok else {
             "kind": "bag_rupture", "phase": "mid", "bag": "p1_1", "outcome": "unsafe",
@@ -101,7 +101,8 @@ def test_ladder_and_cache(toy, tmp_path, monkeypatch):
     assert found["calls"]["nominal"] == len(rungs.seen["nominal"]) == n_static_pass
     layouts = {tuple(r["points_m"]) for r in rows if r["statics"]["passed"]}
     failed = {tuple(r.get("points_m", ())) for r in rows if not r["statics"]["passed"]}
-    reached = {tuple(b.x_m for b in sc.lift.bags) for sc in rungs.seen["nominal"]}
+    reached = {tuple(b.x_m for b in sc.lift.bags if b.kind == "external")
+               for sc in rungs.seen["nominal"]}
     assert reached <= layouts and not reached & (failed - layouts)
     one_point = [r for r in rows if r["statics"]["passed"] and r["candidate"]["points"] == 1]
     assert all(r["reached"] == "contingency" and not r["passed"] for r in one_point)
@@ -145,7 +146,8 @@ def test_plan_yaml_runs_unchanged(toy, tmp_path):
     path = tmp_path / "out" / "plan.yaml"
     plan = load_scenario(path)
     assert sum(b.count for b in plan.lift.bags) == s["best"]["bags"]
-    assert [b.x_m for b in plan.lift.bags] == [p["x_m"] for p in s["best"]["points"]]
+    assert [b.x_m for b in plan.lift.bags if b.kind == "external"] == [
+        p["x_m"] for p in s["best"]["points"]]
     res = simulate(plan, duration=5.0)
     assert len(res.criteria) > 0
     spec = parse_spec({"base": str(path), "study": "salvage", "monte_carlo": {"samples": 3}})

@@ -1,9 +1,10 @@
 """``flexlift design SCENARIO``: the plan to rig, searched for and proved by the checks a user
 would run (the static checks, the nominal ascent, every single failure, the salvage study).
 
-The search (optuna's NSGA-II, seeded) chooses the catalogue bag, the lift points and the
-bags at each, and, when given several values, the control mode, the planned ascent speed,
-the breakout pull and the dump valve; each candidate goes up the ladder only as far as it
+The search (optuna's NSGA-II, seeded) chooses the catalogue bag (or one per lift point,
+--per-point-types), the lift points and the bags at each, the internal bags in the tanks,
+and, when given several values, the control mode, the planned ascent speed, the breakout
+pull, the dump valve and the compressor's supply; each candidate goes up the ladder only as far as it
 survives. The folder (default ``flexlift-out/design-<scenario>``) keeps every evaluation:
 the same command again after an interruption resumes and gives the same plan.
 
@@ -69,6 +70,14 @@ def add_parser(sub) -> None:
                    help="breakout pulls [t] to choose from; auto: the default share")
     p.add_argument("--dump-valve", type=_list(float, "--dump-valve"), default=None,
                    metavar="LIST", help="dump-valve capacity factors on the catalogue's")
+    p.add_argument("--internal", type=_range, default=None, metavar="LOW..HIGH",
+                   help="internal bags in the ballast tanks, of the bags in all (default "
+                   "0..as many as the tanks hold; 0: none)")
+    p.add_argument("--per-point-types", action="store_true",
+                   help="let each lift point pick its own catalogue bag (of one type)")
+    p.add_argument("--supply", type=_list(float, "--supply"), default=None, metavar="LIST",
+                   help="compressor free-air deliveries [m3/min] to choose from; auto: the "
+                   "scenario's gas supply (default)")
     p.add_argument("--objectives", type=_list(str, "--objectives"), default=["bags"],
                    metavar="LIST", help="bags, gas and/or cost (several: a Pareto front)")
     p.add_argument("--target", type=float, default=0.01,
@@ -106,7 +115,9 @@ def _main(args: argparse.Namespace) -> int:
         raise InputError("--span", ",".join(map(str, args.span)), "two numbers FROM,TO [m]")
     space = make_space(scenario, models=args.bags, points=args.points, over=args.over,
                        count=args.count, modes=args.modes, speeds=args.speeds,
-                       pulls=args.pulls, dump_factors=args.dump_valve, span=args.span)
+                       pulls=args.pulls, dump_factors=args.dump_valve, span=args.span,
+                       internal=args.internal, per_point=args.per_point_types,
+                       supplies=args.supply)
     options = Options(budget=args.budget, population=args.population, seed=args.seed,
                       target=args.target, objectives=tuple(args.objectives), up_to=args.up_to,
                       samples=args.samples)
@@ -135,7 +146,9 @@ def _print(s: dict, out: Path) -> None:
     lines = []
     if b is not None:
         p = b["p_unsafe"] or {}
-        lines.append(f"proposal: {b['bags']} x {b['types'][0]} at {len(b['points'])} lift "
+        inner = f", {b['internal']} internal" if b.get("internal") else ""
+        lines.append(f"proposal: {b['bags']} x {' + '.join(b['types'])}{inner} at "
+                     f"{len(b['points'])} lift "
                      f"points ({b['mode']}, {b['ascent_speed_m_s']:g} m/s); single failures "
                      f"{b['contingency'] or 'not run'}; P(unsafe) "
                      + (f"{p['p']:.3f} ({p['low']:.3f}-{p['high']:.3f}, n = {p['n']})"

@@ -29,7 +29,9 @@ def nearby(rows: list[dict], best: dict | None, n: int = 8) -> list[dict]:
             continue
         seen.add(r["candidate_key"])
         rej = r.get("rejected") or {}
-        out.append({"bags": r["bags"], "model": r["candidate"]["model"],
+        c = r["candidate"]
+        out.append({"bags": r["bags"], "model": " + ".join(c.get("point_models") or [c["model"]]),
+                    "internal": c.get("internal", 0),
                     "points": r["candidate"]["points"], "mode": r["candidate"]["mode"],
                     "rung": rej.get("rung"), "check": rej.get("check"),
                     "why": rej.get("why", "")})
@@ -52,7 +54,7 @@ def no_plan(rows: list[dict], space) -> dict:
         if "strength" in worst:
             hints.append("more lift points, spreading the lift along the hull")
     if where.get("contingency"):
-        hints.append("a second supply or a larger dump valve (--dump-valve), or more bags "
+        hints.append("a second supply (--supply) or a larger dump valve (--dump-valve), or more bags "
                      "(--over): some single failure is unsafe for every plan tried")
     if where.get("salvage"):
         hints.append("a slower planned ascent (--speeds) or more margin (--over): the salvage "
@@ -115,8 +117,9 @@ def _decision(summary: dict) -> str:
     if b is None:
         return ("<p><b>No plan found</b> in the space searched: every candidate failed a "
                 "check (below: where, and what would change it).</p>")
-    return (f"<p><b>Rig {b['bags']} x {html.escape(b['types'][0])}</b> at {len(b['points'])} "
-            f"lift points ({html.escape(b['mode'])} control, {b['ascent_speed_m_s']:g} m/s): "
+    inner = f" ({b['internal']} of them internal, in the tanks)" if b.get("internal") else ""
+    return (f"<p><b>Rig {b['bags']} x {html.escape(' + '.join(b['types']))}</b>{inner} at "
+            f"{len(b['points'])} lift points ({html.escape(b['mode'])} control, {b['ascent_speed_m_s']:g} m/s): "
             f"the least found that passed every check up to the {RUNG_TEXT[b['reached']]}; "
             f"{b['bags'] / lb['n_minus_1']:.2f} x the N-1 lower bound of {lb['n_minus_1']} "
             "bags.</p>")
@@ -150,7 +153,7 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
              "<h2>Pareto front</h2><img src='pareto.png' alt='bags and gas of every "
              "candidate'>",
              "<table>" + _row(["bags", "model", "gas m3", "cost", "P(unsafe)"], True)
-             + "".join(_row([p["bags"], p["types"][0], p["gas_m3"], p["cost"],
+             + "".join(_row([p["bags"], " + ".join(p["types"]), p["gas_m3"], p["cost"],
                              _p(p["p_unsafe"])]) for p in summary["pareto"]) + "</table>",
              "<h2>Why the nearby alternatives were rejected</h2><table>"
              + _row(["bags", "model", "points", "rung", "check", "why"], True)

@@ -121,16 +121,27 @@ def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
                   "ascent_speeds_m_s": list(space.ascent_speeds),
                   "breakout_pulls_t": list(space.breakout_pulls),
                   "dump_valve_factors": list(space.dump_valve_factors),
+                  "internal": list(space.internal), "per_point_types": space.per_point,
+                  "supplies_free_air_m3_min": list(space.supplies),
                   "span_m": list(space.span_m)},
         "nearby": report.nearby(rows, best),
         "elapsed_s": round(elapsed, 2),
     }
 
 
-def _key(r: dict) -> str:
+def _candidate(r: dict):
+    """The :class:`~flexlift.design.space.Candidate` of a row (a cached one's lists as
+    tuples)."""
     from flexlift.design.space import Candidate
 
-    return Candidate(**r["candidate"]).key()
+    c = dict(r["candidate"])
+    if c.get("point_models") is not None:
+        c["point_models"] = tuple(c["point_models"])
+    return Candidate(**c)
+
+
+def _key(r: dict) -> str:
+    return _candidate(r).key()
 
 
 def _closest(rows: list[dict]) -> dict:
@@ -141,9 +152,13 @@ def _closest(rows: list[dict]) -> dict:
 def _brief(r: dict) -> dict:
     c = r.get("contingency") or {}
     s = r.get("salvage") or {}
-    return {"bags": r["bags"], "types": [r["candidate"]["model"]], "type": r["type"],
-            "lift_t": r["lift_t"], "points": [{"x_m": x, "count": n} for x, n in
-                                              zip(r.get("points_m", []), r["counts"])],
+    cand = _candidate(r)
+    models = cand.models()
+    return {"bags": r["bags"], "types": sorted(set(models), key=models.index),
+            "type": r["type"], "lift_t": r["lift_t"],
+            "points": [{"x_m": x, "count": n, "model": m} for x, n, m in
+                       zip(r.get("points_m", []), r["counts"], models)],
+            "internal": cand.internal, "supply_free_air_m3_min": cand.supply_free_air_m3_min,
             "gas_m3": r.get("gas_m3"), "cost": r.get("cost"),
             "mode": r["candidate"]["mode"],
             "ascent_speed_m_s": r["candidate"]["ascent_speed_m_s"],
@@ -159,27 +174,30 @@ def _write(folder: Path, summary: dict, found: dict, scenario) -> None:
     write_json(folder / "summary.json", summary)
     write_text(folder / "candidates.csv", _csv(rows))
     if summary["best"] is not None:
-        from flexlift.design.space import Candidate
-
         best = next(r for r in rows if r["candidate_key"] == summary["best"]["key"])
-        plan = found["evaluator"].scenario_of(Candidate(**best["candidate"]))
+        plan = found["evaluator"].scenario_of(_candidate(best))
         write_text(folder / "plan.yaml", "# proposed by flexlift design: "
-                   f"{best['bags']} x {best['candidate']['model']}\n" + plan.to_yaml())
+                   f"{best['bags']} x {', '.join(summary['best']['types'])}"
+                   + (f" ({best['candidate']['internal']} internal)"
+                      if best["candidate"]["internal"] else "") + "\n" + plan.to_yaml())
     report.write(folder, summary, rows)
 
 
 def _csv(rows: list[dict]) -> str:
-    cols = ("trial", "key", "model", "bags", "points", "counts", "mode", "ascent_speed_m_s",
-            "breakout_pull_t", "dump_valve_factor", "gas_m3", "cost", "reached", "passed",
-            "rejected_rung", "rejected_check", "rejected_why")
+    cols = ("trial", "key", "model", "bags", "points", "counts", "internal", "point_models",
+            "mode", "ascent_speed_m_s", "breakout_pull_t", "dump_valve_factor",
+            "supply_free_air_m3_min", "gas_m3", "cost", "reached", "passed", "rejected_rung",
+            "rejected_check", "rejected_why")
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(cols)
     for r in rows:
         c, rej = r["candidate"], r.get("rejected") or {}
         w.writerow([r["trial"], r["candidate_key"], c["model"], r["bags"], c["points"],
-                    " ".join(map(str, r["counts"])), c["mode"], c["ascent_speed_m_s"],
-                    c["breakout_pull_t"], c["dump_valve_factor"], r.get("gas_m3"),
+                    " ".join(map(str, r["counts"])), c.get("internal", 0),
+                    " ".join(c.get("point_models") or ()), c["mode"], c["ascent_speed_m_s"],
+                    c["breakout_pull_t"], c["dump_valve_factor"],
+                    c.get("supply_free_air_m3_min"), r.get("gas_m3"),
                     r.get("cost"), r["reached"], r["passed"], rej.get("rung", ""),
                     rej.get("check", ""), rej.get("why", "")])
     return buf.getvalue()

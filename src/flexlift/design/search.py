@@ -15,9 +15,10 @@ import time
 from dataclasses import asdict, dataclass
 
 from flexlift import constants as C
-from flexlift.design import dynamic
+from flexlift.design import dynamic, mixed
 from flexlift.design.bound import lower_bound
 from flexlift.design.cache import Cache
+from flexlift.design.internal import most_internal, tank_check
 from flexlift.design.space import VARIABLES, Candidate, Space, candidate_changes
 from flexlift.design.statics import static_checks
 from flexlift.errors import InputError
@@ -77,8 +78,10 @@ def check_options(o: Options, space: Space) -> None:
                              f"{missing[0]}; add cost: to its entries (lift.catalogue_file)")
 
 
-def _suggest(trial, space: Space, fewest: dict) -> Candidate:
-    """The candidate of ``trial``; ``fewest`` the bags of each model that lift (N)."""
+def _suggest(trial, space: Space, ev) -> Candidate:
+    """The candidate of ``trial``, each variable asked by name (a fixed one is not asked);
+    ``ev`` the evaluator (the fewest bags of each model that lift, N; the most internal bags
+    of each model the tanks hold)."""
     fixed = space.fixed()
 
     def pick(name, choices):
@@ -87,18 +90,37 @@ def _suggest(trial, space: Space, fewest: dict) -> Candidate:
     def whole(name, pair):
         return fixed[name] if name in fixed else trial.suggest_int(name, pair[0], pair[1])
 
-    model = pick("model", space.models)
-    points = whole("points", space.points)
-    if space.count is not None:
-        bags = points * space.count
+    if space.per_point:  # the points first, then each point's bag
+        points = whole("points", space.points)
+        point_models = [pick(f"model_{j + 1}", space.models) if len(space.models) > 1
+                        else space.models[0] for j in range(points)]
+        model = mixed.largest(point_models, space.entries)
     else:
-        bags = fewest[model] + whole("over", space.over)
-    points = min(points, bags)
-    return Candidate(model=model, points=points, count=bags // points, extra=bags % points,
-                     mode=pick("mode", space.modes),
+        model = pick("model", space.models)
+        points = whole("points", space.points)
+        point_models = [model] * points
+    lo, hi = space.internal
+    internal = fixed["internal"] if "internal" in fixed else trial.suggest_int(
+        "internal", lo, max(lo, min(hi, ev.most[model])))  # the range of this bag's tanks
+    if space.count is not None:
+        bags = points * space.count + internal
+    elif len(set(point_models)) > 1:
+        lifts = [float(space.entries[m]["lift_t"]) for m in point_models]
+        bags = mixed.fewest(lifts, internal, float(space.entries[model]["lift_t"]),
+                            ev.bounds[model]["required_lift_t"]) + whole("over", space.over)
+    else:
+        bags = ev.fewest[model] + whole("over", space.over)
+    external = max(bags - internal, 0)
+    points = max(1, min(points, external))
+    point_models = point_models[:points]
+    return Candidate(model=model, points=points, count=external // points,
+                     extra=external % points, mode=pick("mode", space.modes),
                      ascent_speed_m_s=pick("ascent_speed_m_s", space.ascent_speeds),
                      breakout_pull_t=pick("breakout_pull_t", space.breakout_pulls),
-                     dump_valve_factor=pick("dump_valve_factor", space.dump_valve_factors))
+                     dump_valve_factor=pick("dump_valve_factor", space.dump_valve_factors),
+                     internal=internal,
+                     point_models=tuple(point_models) if len(set(point_models)) > 1 else None,
+                     supply_free_air_m3_min=pick("supply_free_air_m3_min", space.supplies))
 
 
 class Evaluator:
@@ -114,6 +136,8 @@ class Evaluator:
         self.bounds = {m: lower_bound(scenario, self.hull, e["lift_t"])
                        for m, e in space.entries.items()}
         self.fewest = {m: b["n"] for m, b in self.bounds.items()}
+        self.most = {m: most_internal(scenario, self.hull, float(e["lift_t"]))
+                     for m, e in space.entries.items()}
         self.last = RUNGS.index(options.up_to)
 
     def scenario_of(self, c: Candidate):
@@ -152,20 +176,27 @@ class Evaluator:
     def _statics(self, c: Candidate):
         self.calls["statics"] += 1
         entry = self.space.entries[c.model]
+        bags = _bag_models(c)  # the model of every bag, external then internal
+        costs = [self.space.entries[m].get("cost") for m in bags]
         res = {"candidate": asdict(c), "bags": c.bags, "counts": c.counts(),
                "lift_t": float(entry["lift_t"]), "type": entry["type"],
-               "cost": None if entry.get("cost") is None else c.bags * float(entry["cost"]),
+               "cost": None if None in costs else float(sum(costs)),
                "reached": "statics", "passed": False, "rejected": None}
-        try:
-            sc = self.scenario_of(c)
-        except InputError as exc:
-            res["statics"] = {"passed": False, "check": "scenario", "why": str(exc),
-                              "violation": 1.0}
-            res["rejected"] = {"rung": "statics", "check": "scenario", "why": str(exc)}
+        failed = tank_check(self.scenario, self.hull, c.internal, float(entry["lift_t"]))
+        if failed is None:
+            try:
+                sc = self.scenario_of(c)
+            except InputError as exc:
+                failed = {"passed": False, "check": "scenario", "why": str(exc),
+                          "violation": 1.0}
+        if failed is not None:
+            res["statics"] = failed
+            res["rejected"] = {"rung": "statics", "check": failed["check"],
+                               "why": failed["why"]}
             return res, None
-        res["points_m"] = [b["x_m"] for b in candidate_changes(c, self.space, self.hull,
-                                                                 self.scenario)["lift.bags"]]
-        res["gas_m3"] = _gas_estimate(sc, c.bags * float(entry["lift_t"]))
+        res["points_m"] = [b.x_m for b in sc.lift.bags if b.kind == "external"]
+        lift_t = sum(float(self.space.entries[m]["lift_t"]) for m in bags)
+        res["gas_m3"] = _gas_estimate(sc, lift_t)
         st = static_checks(sc, self.hull, self.o.tolerant)
         res["statics"], res["passed"] = st, st["passed"]
         if not st["passed"]:
@@ -189,6 +220,11 @@ class Evaluator:
             res["gas_m3"] = r["gas_m3"]
         if not r["passed"]:
             res["rejected"] = {"rung": rung, **_why(rung, r)}
+
+
+def _bag_models(c: Candidate) -> list[str]:
+    """The catalogue bag of each of ``c``'s bags: every point's, then the internal ones'."""
+    return [m for m, n in zip(c.models(), c.counts()) for _ in range(n)] + [c.model] * c.internal
 
 
 def _why(rung: str, r: dict) -> dict:
@@ -253,7 +289,7 @@ def run_search(scenario, space: Space, options: Options, engine, cache: Cache,
     while len(rows) < options.budget:
         n = min(options.population, options.budget - len(rows))
         trials = [study.ask() for _ in range(n)]
-        results = ev.generation([_suggest(t, space, ev.fewest) for t in trials])
+        results = ev.generation([_suggest(t, space, ev) for t in trials])
         for t, res in zip(trials, results):
             for rung, value in zip(RUNGS, constraints(res, ev.last)):
                 t.set_constraint(rung, value)  # feasible when every value is <= 0

@@ -5,8 +5,11 @@ A candidate is a few named choices: the catalogue bag (``model``), the number of
 :mod:`flexlift.design.bound`, plus ``over``), shared over the points as evenly as they go
 (the count per point: ``bags // points``, one more at ``bags % points`` points spread along
 the hull; or a count per point the user fixes), the control mode, the planned ascent speed,
-the breakout pull, and the dump valve as a factor on the catalogue bag's. Every part is a tuple of allowed values; a part given one value is fixed
-by the user. The lift points are placed by the balanced layout's rule
+the breakout pull, the dump valve as a factor on the catalogue bag's, the internal bags
+(``internal`` of the ``bags``, in the tanks: :mod:`flexlift.design.internal`), one catalogue
+bag per lift point (``point_models``: :mod:`flexlift.design.mixed`) and the compressor's
+free-air delivery (``gas.supply_free_air_m3_min``). Every part is a tuple of allowed values;
+a part given one value is fixed by the user. The lift points are placed by the balanced layout's rule
 (:func:`flexlift.loads.balance.equal_share_positions`): the n bags' equal-load centroids,
 grouped in order into the points by their counts, each point at its group's mean, so the
 lift centroid stays on the centre of what the bags carry whatever the counts; points are
@@ -21,19 +24,27 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from flexlift import constants as C
+from flexlift.design import internal as tanks
+from flexlift.design import mixed
 from flexlift.errors import InputError
 from flexlift.loads import balance
 from flexlift.scenario import catalogue
 
 #: the variables of a candidate, in the order the optimiser asks for them
-VARIABLES = ("model", "points", "over", "mode", "ascent_speed_m_s",
-             "breakout_pull_t", "dump_valve_factor")
+VARIABLES = ("model", "points", "internal", "over", "mode", "ascent_speed_m_s",
+             "breakout_pull_t", "dump_valve_factor", "supply_free_air_m3_min")
+#: the parts added after the first caches: left out of the key at these values, so that a
+#: candidate without them keeps the key it had
+NEW_DEFAULTS = {"internal": 0, "point_models": None, "supply_free_air_m3_min": None}
 
 
 @dataclass(frozen=True)
 class Candidate:
-    """One plan to evaluate: its bag, points and counts (``count`` at every point, one more
-    at ``extra`` of them), its control choices."""
+    """One plan to evaluate: its bag, points and counts (``count`` external bags at every
+    point, one more at ``extra`` of them; ``internal`` more in the tanks), its control and
+    equipment choices; ``point_models`` each point's own catalogue bag (aft to bow), None:
+    ``model`` at every point; ``supply_free_air_m3_min`` None: the scenario's supply."""
 
     model: str
     points: int
@@ -43,21 +54,31 @@ class Candidate:
     ascent_speed_m_s: float
     breakout_pull_t: float | None
     dump_valve_factor: float
+    internal: int = 0
+    point_models: tuple[str, ...] | None = None
+    supply_free_air_m3_min: float | None = None
 
     @property
     def bags(self) -> int:
-        return self.points * self.count + self.extra
+        """Bags in all, external and internal."""
+        return self.points * self.count + self.extra + self.internal
 
     def counts(self) -> list[int]:
-        """Bags at each point, aft to bow: the ``extra`` bags spread evenly over the points."""
-        out = [self.count] * self.points
-        for j in range(self.extra):
-            out[int((j + 0.5) * self.points / self.extra)] += 1
-        return out
+        """External bags at each point, aft to bow: the ``extra`` bags spread evenly."""
+        return mixed.spread(self.points * self.count + self.extra, self.points)
+
+    def models(self) -> list[str]:
+        """Each lift point's catalogue bag, aft to bow."""
+        return list(self.point_models) if self.point_models else [self.model] * self.points
 
     def key(self) -> str:
-        """The checksum that names this candidate in the cache (its values only)."""
-        text = json.dumps(asdict(self), sort_keys=True)
+        """The checksum that names this candidate in the cache (its values only; the parts of
+        :data:`NEW_DEFAULTS` only when they differ from those values)."""
+        d = asdict(self)
+        if d["point_models"] is not None:
+            d["point_models"] = list(d["point_models"])
+        d = {k: v for k, v in d.items() if k not in NEW_DEFAULTS or v != NEW_DEFAULTS[k]}
+        text = json.dumps(d, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -73,6 +94,9 @@ class Space:
     ascent_speeds: tuple[float, ...]
     breakout_pulls: tuple[float | None, ...]
     dump_valve_factors: tuple[float, ...] = (1.0,)
+    internal: tuple[int, int] = (0, 0)  # inclusive range: internal bags of the bags in all
+    per_point: bool = False  # one catalogue bag per lift point
+    supplies: tuple[float | None, ...] = (None,)  # free-air deliveries [m^3/min]; None: own
     span_m: tuple[float, float] | None = None
     entries: dict = field(default_factory=dict, compare=False)  # model -> catalogue entry
 
@@ -81,7 +105,11 @@ class Space:
         parts = {"model": self.models, "points": _range(self.points),
                  "over": _range(self.over), "mode": self.modes,
                  "ascent_speed_m_s": self.ascent_speeds, "breakout_pull_t": self.breakout_pulls,
-                 "dump_valve_factor": self.dump_valve_factors}
+                 "dump_valve_factor": self.dump_valve_factors,
+                 "internal": _range(self.internal),
+                 "supply_free_air_m3_min": self.supplies}
+        if self.per_point:
+            parts["model"] = ()  # asked point by point
         return {k: v[0] for k, v in parts.items() if len(v) == 1}
 
 
@@ -90,12 +118,15 @@ def _range(pair) -> tuple:
 
 
 def make_space(scenario, models=None, points=None, over=None, count=None, modes=None,
-               speeds=None, pulls=None, dump_factors=None, span=None) -> Space:
+               speeds=None, pulls=None, dump_factors=None, span=None, internal=None,
+               per_point=False, supplies=None) -> Space:
     """The search space of ``scenario``: each part as given (a sequence of allowed values, a
-    ``(low, high)`` range for ``points`` and ``over``), else its default (every catalogue
-    bag that is not kept as published, 1..12 points, 0..12 bags over the fewest, the
-    scenario's mode, speed and pull, the catalogue's dump valve). An empty or contradictory
-    part is an InputError (one line)."""
+    ``(low, high)`` range for ``points``, ``over`` and ``internal``), else its default
+    (every catalogue bag that is not kept as published, 1..12 points, 0..12 bags over the
+    fewest, 0..the most internal bags the tanks hold of the smallest bag offered, the
+    scenario's mode, speed, pull and supply, the catalogue's dump valve); ``per_point``: one
+    catalogue bag per lift point. An empty or contradictory part is an InputError (one
+    line)."""
     cat = catalogue.load(scenario.lift.catalogue_file)
     if models is None:
         models = tuple(n for n, e in cat.items() if not e.get("as_published"))
@@ -117,12 +148,49 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
                   breakout_pulls=tuple(pulls or (c.breakout_pull_t,)),
                   dump_valve_factors=tuple(dump_factors or (1.0,)),
                   span_m=_span(span, scenario.hull.length_m),
-                  entries={m: cat[m] for m in models})
+                  entries={m: cat[m] for m in models},
+                  internal=_internal(scenario, internal, [cat[m]["lift_t"] for m in models]),
+                  per_point=bool(per_point), supplies=_supplies(supplies))
+    if space.per_point:
+        mixed.check_one_type(space.entries)
     for name, values in (("--modes", space.modes), ("--speeds", space.ascent_speeds),
                          ("--dump-valve", space.dump_valve_factors)):
         if not values:
             raise InputError(name, "", "give at least one value")
     return space
+
+
+def _internal(scenario, value, lifts_t) -> tuple[int, int]:
+    """The range of internal bags: as given (refused on a structure without tanks, or above
+    what the tanks hold of every bag offered), else 0..the most (:mod:`~flexlift.design.internal`)."""
+    from flexlift.structure.hull import hull_from_scenario
+
+    hull = hull_from_scenario(scenario)
+    most = max(tanks.most_internal(scenario, hull, float(f)) for f in lifts_t)
+    if value is None:
+        return 0, most
+    lo, hi = _pair(value, (0, 0), "--internal", low=0)
+    if hi > 0 and not tanks.has_tanks(scenario):
+        raise InputError("--internal", f"{lo}..{hi}", "the structure has no ballast tanks "
+                         "(hull.ballast_tank_frames): 0 internal bags")
+    if lo > most:
+        raise InputError("--internal", f"{lo}..{hi}", f"the tanks hold at most {most} of the "
+                         "bags offered (docs/theory/design.md#internal-bags)")
+    return lo, hi
+
+
+def _supplies(values) -> tuple[float | None, ...]:
+    """The compressors' free-air deliveries [m^3/min] (None: the scenario's own supply)."""
+    if values is None:
+        return (None,)
+    out = tuple(None if v is None else float(v) for v in values)
+    for v in out:
+        if v is not None and not 0.01 <= v <= 100_000:
+            raise InputError("--supply", v, "a compressor's free-air delivery in m3/min, "
+                             "0.01..100000, or auto (the scenario's supply)")
+    if not out:
+        raise InputError("--supply", "", "give at least one value")
+    return out
 
 
 def _pair(value, default, name, low: int = 1) -> tuple[int, int]:
@@ -143,12 +211,16 @@ def _span(span, length: float) -> tuple[float, float]:
     return a, b
 
 
-def positions(hull, scenario, counts: list[int], span: tuple[float, float]) -> list[float]:
-    """The lift points' positions [m] for ``counts`` bags at each (module docstring)."""
+def positions(hull, scenario, counts: list[int], span: tuple[float, float],
+              internal: list[dict] = ()) -> list[float]:
+    """The lift points' positions [m] for ``counts`` external bags at each (module
+    docstring), balancing what the ``internal`` bags (``lift.bags`` entries, full) leave."""
     env = scenario.environment
     g, rho, rho_s = env.gravity_m_s2, env.seawater_density_kg_m3, env.steel_density_kg_m3
     x, q, pts = balance.design_load(hull, hull.wet_weight_per_length(g, rho, rho_s),
-                                    hull.point_wet_weights(g, rho, rho_s), [], [], 1.0)
+                                    hull.point_wet_weights(g, rho, rho_s),
+                                    [tuple(b["span_m"]) for b in internal],
+                                    [b["lift_t"] * C.TONNE * g for b in internal], 1.0)
     each = balance.equal_share_positions(x, q, pts, int(sum(counts)))
     out, k = [], 0
     for n in counts:
@@ -157,10 +229,13 @@ def positions(hull, scenario, counts: list[int], span: tuple[float, float]) -> l
     return out
 
 
-def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dict:
-    """The dotted scenario changes that make ``candidate`` the plan: the catalogue bag, its
-    lift points listed in ``lift.bags`` (clusters by ``count``), the control choices."""
-    entry = space.entries[candidate.model]
+def catalogue_bag(candidate: Candidate, space: Space) -> dict:
+    """``lift.catalogue_bag`` of ``candidate``: its bag's entry (with per-point types the
+    envelope of the points' bags, :func:`flexlift.design.mixed.envelope`), its dump valve
+    scaled by the candidate's factor."""
+    models = sorted(set(candidate.models()))
+    entry = (mixed.envelope(models, space.entries) if len(models) > 1
+             else space.entries[candidate.model])
     bag = {k: v for k, v in entry.items() if k in ("type", "lift_t", "diameter_m", "length_m",
                                                    "working_pressure_bar", "relief_bar",
                                                    "dump_valve_m3_s", "rated_depth_m",
@@ -168,11 +243,25 @@ def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dic
     bag["model"] = candidate.model
     if bag.get("dump_valve_m3_s") is not None:
         bag["dump_valve_m3_s"] = float(bag["dump_valve_m3_s"]) * candidate.dump_valve_factor
+    return bag
+
+
+def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dict:
+    """The dotted scenario changes that make ``candidate`` the plan: the catalogue bag, its
+    lift points listed in ``lift.bags`` (clusters by ``count``, each of its point's bag's
+    lift), its internal bags over the tanks, the control and supply choices."""
+    lift_int = float(space.entries[candidate.model]["lift_t"])
+    inner = tanks.internal_specs(scenario, hull, candidate.internal, lift_int)
     counts = candidate.counts()
-    xs = positions(hull, scenario, counts, space.span_m)
+    xs = positions(hull, scenario, counts, space.span_m, inner)
     bags = [{"name": f"p{j + 1}", "kind": "external", "x_m": round(x, 4), "count": n,
-             "lift_t": float(entry["lift_t"])} for j, (x, n) in enumerate(zip(xs, counts))]
-    return {"lift.catalogue_bag": bag, "lift.bags": bags, "lift.internal_bags": 0,
-            "lift.bag_lift_t": None, "control.mode": candidate.mode,
-            "control.ascent_speed_m_s": candidate.ascent_speed_m_s,
-            "control.breakout_pull_t": candidate.breakout_pull_t}
+             "lift_t": float(space.entries[m]["lift_t"])}
+            for j, (x, n, m) in enumerate(zip(xs, counts, candidate.models()))]
+    out = {"lift.catalogue_bag": catalogue_bag(candidate, space), "lift.bags": bags + inner,
+           "lift.internal_bags": candidate.internal, "lift.bag_lift_t": None,
+           "control.mode": candidate.mode,
+           "control.ascent_speed_m_s": candidate.ascent_speed_m_s,
+           "control.breakout_pull_t": candidate.breakout_pull_t}
+    if candidate.supply_free_air_m3_min is not None:
+        out["gas.supply_free_air_m3_min"] = candidate.supply_free_air_m3_min
+    return out

@@ -296,15 +296,22 @@ def _tank_layout(scenario, hull: Hull, n_int: int, n_ext: int, per: float, make,
     nearest nodes when ``snap``, as the paper does)."""
     if not n_int:
         return []
+    edges = tank_edges(scenario, hull, n_int, snap)
+    return [make(f"bag_{n_ext + k + 1}", "internal", 0.5 * (edges[k] + edges[k + 1]),
+                 (float(edges[k]), float(edges[k + 1])), None, per) for k in range(n_int)]
+
+
+def tank_edges(scenario, hull: Hull, n_int: int, snap: bool = True) -> np.ndarray:
+    """The ends of ``n_int`` internal bags laid end to end over the ballast-tank span
+    (``hull.ballast_tank_frames`` x ``hull.frame_spacing_m``) [m], (n_int + 1,); the span's
+    ends snapped to the nearest nodes when ``snap``. A span off the hull is one line."""
     fs = scenario.hull.frame_spacing_m
     f0, f1 = scenario.hull.ballast_tank_frames
     x0, x1 = (_snap(f0 * fs, hull), _snap(f1 * fs, hull)) if snap else (f0 * fs, f1 * fs)
     if not 0 <= f0 * fs < f1 * fs <= hull.length or x1 <= x0:
         raise InputError("hull.ballast_tank_frames", [f0, f1],
                          f"the tank span must lie on the hull, 0..{hull.length / fs:.0f} frames")
-    edges = np.linspace(x0, x1, n_int + 1)
-    return [make(f"bag_{n_ext + k + 1}", "internal", 0.5 * (edges[k] + edges[k + 1]),
-                 (float(edges[k]), float(edges[k + 1])), None, per) for k in range(n_int)]
+    return np.linspace(x0, x1, n_int + 1)
 
 
 def _explicit_bags(specs, hull: Hull, default_lift: float, g: float, make) -> list[Bag]:
