@@ -165,14 +165,16 @@ def _internal(scenario, value, lifts_t) -> tuple[int, int]:
     what the tanks hold of every bag offered), else 0..the most (:mod:`~flexlift.design.internal`)."""
     from flexlift.structure.hull import hull_from_scenario
 
+    lo, hi = (0, None) if value is None else _pair(value, (0, 0), "--internal", low=0)
+    if not tanks.has_tanks(scenario):
+        if hi:
+            raise InputError("--internal", f"{lo}..{hi}", "the structure has no ballast tanks "
+                             "(hull.ballast_tank_frames): 0 internal bags")
+        return 0, 0
     hull = hull_from_scenario(scenario)
     most = max(tanks.most_internal(scenario, hull, float(f)) for f in lifts_t)
     if value is None:
         return 0, most
-    lo, hi = _pair(value, (0, 0), "--internal", low=0)
-    if hi > 0 and not tanks.has_tanks(scenario):
-        raise InputError("--internal", f"{lo}..{hi}", "the structure has no ballast tanks "
-                         "(hull.ballast_tank_frames): 0 internal bags")
     if lo > most:
         raise InputError("--internal", f"{lo}..{hi}", f"the tanks hold at most {most} of the "
                          "bags offered (docs/theory/design.md#internal-bags)")

@@ -2,8 +2,12 @@
 
 Cheapest first, each with the design basis's own code:
 
-1. ``lift``: the bags' rated lift against the required lift R (breakout factor x W', x the
-   weight contingency), and after losing any one bag (``lift_n_minus_1``);
+1. ``lift``: the bags' rated lift (each bag its own: with one catalogue bag per lift point
+   the points differ) against the required lift R (breakout factor x W', x the weight
+   contingency), and after losing any one bag, the largest (``lift_n_minus_1``); ``holding``:
+   each external bag's share of what it holds through the ascent
+   (:meth:`~flexlift.loads.liftplan.LiftPlan.holding_lifts`: W' less the full internal
+   bags, shared equally) at most its rated lift (only a plan of mixed bags can fail it);
 2. ``arrangement`` and ``rigging``: :func:`flexlift.ascent.arrangement.arrangement_checks`
    (clusters on the hull, headroom, rated depth, dump valve, slings and lift points);
 3. ``workable``: :func:`flexlift.ascent.checks.refuse_unworkable` on the candidate's plant;
@@ -41,6 +45,13 @@ def static_checks(scenario, hull, tolerant: bool = True) -> dict:
         if left < R * (1 - 1e-9):
             return _fail("lift_n_minus_1", f"after losing a bag the rest lift {left / t:,.0f} t "
                          f"of the {R / t:,.0f} t required", (R - left) / R)
+    held = [(h, b.lift) for h, b in zip(plan.holding_lifts(), plan.bags)
+            if b.kind == "external"]
+    over = [(h - f) / f for h, f in held if h > f * (1 + 1e-9)]
+    if over:
+        return _fail("holding", f"each external bag holds {max(h for h, _ in held) / t:,.1f} t "
+                     f"through the ascent; the smallest lifts {min(f for _, f in held) / t:,.1f} "
+                     "t", max(over))
     failed = [c for c in arrangement_checks(scenario, plan) if not c.ok]
     if failed:
         return _fail(failed[0].name, failed[0].message, float(len(failed)))
