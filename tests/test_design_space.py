@@ -98,6 +98,10 @@ def test_internal_bags_in_the_plan_and_the_bound(toy, hull, tmp_path):
     cg = weight_centre(hull, g, sc.environment.seawater_density_kg_m3,
                        sc.environment.steel_density_kg_m3)
     assert abs(plan.lift_centroid - cg) < 0.01 * hull.length
+    from flexlift.ascent import simulate
+
+    res = simulate(sc, duration=5.0)  # the plan runs as it is written
+    assert len(res.criteria) > 0
     space = make_space(toy, models=["open_parachute_5t"], points=(1, 6), over=(0, 6),
                        internal=(0, 6))
     o = Options(budget=36, population=12, up_to="statics")
