@@ -64,6 +64,30 @@ def test_key_unchanged_for_the_first_parts():
     assert len(keys) == 5
 
 
+def test_an_old_cache_still_answers(toy, tmp_path):
+    """Lines written before the new parts existed (no internal, point_models, supply in the
+    candidate) answer the same search over the earlier space (--internal 0): no re-run."""
+    space = make_space(toy, models=["open_parachute_5t"], points=(1, 4), over=(0, 3),
+                       internal=(0, 0))
+    o = Options(budget=12, population=12, up_to="statics")
+    first = run_search(toy, space, o, None, Cache(tmp_path, o.identity(toy, space)))
+    path = tmp_path / "evaluations.jsonl"
+    old = []
+    for line in path.read_text().splitlines():
+        row = json.loads(line)
+        cand = row["result"]["candidate"]
+        for k in ("internal", "point_models", "supply_free_air_m3_min"):
+            del cand[k]
+        # the key as the first designer wrote it: the checksum of the eight values
+        row["key"] = hashlib.sha256(json.dumps(cand, sort_keys=True).encode()
+                                    ).hexdigest()[:20]
+        old.append(json.dumps(row))
+    path.write_text("\n".join(old) + "\n")
+    again = run_search(toy, space, o, None, Cache(tmp_path, o.identity(toy, space)))
+    assert again["calls"]["statics"] == 0 and again["cache_hits"] == 12
+    assert [r["bags"] for r in again["rows"]] == [r["bags"] for r in first["rows"]]
+
+
 def test_internal_bags_the_tanks_hold_by_hand(toy, hull):
     """Room: k V <= the box, V = 1000 F / 1025; weight: k F < W'. 5 t: room 47, weight 6;
     10 t: room 23, weight 3; small tanks (frames 4..8, 28.8 m^3): 5 t room 5."""

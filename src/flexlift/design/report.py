@@ -156,9 +156,10 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
              + "".join(_row([p["bags"], " + ".join(p["types"]), p["gas_m3"], p["cost"],
                              _p(p["p_unsafe"])]) for p in summary["pareto"]) + "</table>",
              "<h2>Why the nearby alternatives were rejected</h2><table>"
-             + _row(["bags", "model", "points", "rung", "check", "why"], True)
-             + "".join(_row([n["bags"], n["model"], n["points"], RUNG_TEXT.get(n["rung"], ""),
-                             n["check"], n["why"]]) for n in summary["nearby"]) + "</table>"]
+             + _row(["bags", "model", "points", "internal", "rung", "check", "why"], True)
+             + "".join(_row([n["bags"], n["model"], n["points"], n.get("internal", 0),
+                             RUNG_TEXT.get(n["rung"], ""), n["check"], n["why"]])
+                       for n in summary["nearby"]) + "</table>"]
     if summary["no_plan"]:
         np_ = summary["no_plan"]
         parts.append("<h2>No plan: what would change it</h2><ul>" + "".join(
