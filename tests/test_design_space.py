@@ -17,7 +17,7 @@ from flexlift import load_scenario
 from flexlift.ascent.checks import weight_centre
 from flexlift.cli import main
 from flexlift.design.cache import Cache
-from flexlift.design.internal import most_internal, tank_check, tank_volume_m3
+from flexlift.design.internal import most_internal, room, tank_box_m, tank_check
 from flexlift.design.run import run_design
 from flexlift.design.search import Options, run_search
 from flexlift.design.space import Candidate, candidate_changes, make_space
@@ -28,8 +28,8 @@ from flexlift.structure.hull import hull_from_scenario
 TOY = str(Path(__file__).parent / "data" / "design_beam.yaml")
 WET_T = 40.0 * (1 - 1025.0 / 7850.0)  # W' = 34.78 t
 REQUIRED_T = 1.3 * WET_T  # R = 45.21 t
-#: the toy's tanks: frames 4..36 of 0.6 m over the 6 m x 2 m section
-BOX_M3 = (36 - 4) * 0.6 * 6.0 * 2.0  # 230.4 m^3
+#: the toy's tanks: frames 4..36 of 0.6 m, over the 6 m x 2 m section
+SPAN_M = (36 - 4) * 0.6  # 19.2 m
 
 
 @pytest.fixture(scope="module")
@@ -89,18 +89,22 @@ def test_an_old_cache_still_answers(toy, tmp_path):
 
 
 def test_internal_bags_the_tanks_hold_by_hand(toy, hull):
-    """Room: k V <= the box, V = 1000 F / 1025; weight: k F < W'. 5 t: room 47, weight 6;
-    10 t: room 23, weight 3; small tanks (frames 4..8, 28.8 m^3): 5 t room 5."""
-    assert tank_volume_m3(toy) == pytest.approx(BOX_M3)
-    for lift_t, room in ((5.0, 47), (10.0, 23)):
-        assert room == math.floor(BOX_M3 * 1025 / (1000 * lift_t))
-        weight = math.ceil(WET_T / lift_t) - 1
-        assert most_internal(toy, hull, lift_t) == min(room, weight)
-    assert most_internal(toy, hull, 5.0) == 6 and tank_check(toy, hull, 6, 5.0) is None
-    assert tank_check(toy, hull, 7, 5.0)["check"] == "tanks"  # 35 t >= W'
-    small = toy.with_changes(**{"hull.ballast_tank_frames": [4, 8]})
-    assert most_internal(small, hull, 5.0) == 5  # floor(28.8 x 1.025 / 5)
-    assert "box" in tank_check(small, hull, 6, 5.0)["why"]
+    """Room: bodies D x D x L lying in rows in the tank span's box (19.2 x 6 x 2 m);
+    weight: k F < W'. 5 t (1.61 x 2.42 m): room 7 x 3 x 1 = 21, weight 6; 10 t (2.03 x
+    3.05 m): no row fits the 2 m depth, 0; small tanks (frames 4..12, 4.8 m): 5 t room 3."""
+    cat = make_space(toy, models=["open_parachute_5t", "open_parachute_10t"]).entries
+    five, ten = cat["open_parachute_5t"], cat["open_parachute_10t"]
+    assert tank_box_m(toy) == pytest.approx((SPAN_M, 6.0, 2.0))
+    assert room(toy, five) == math.floor(SPAN_M / 2.42) * math.floor(6 / 1.61) * 1 == 21
+    assert room(toy, ten) == 0  # floor(2 / 2.03) = 0
+    assert most_internal(toy, hull, five) == min(21, math.ceil(WET_T / 5.0) - 1) == 6
+    assert most_internal(toy, hull, ten) == 0
+    assert tank_check(toy, hull, 6, five) is None
+    assert "submerged weight" in tank_check(toy, hull, 7, five)["why"]  # 35 t >= W'
+    assert "box" in tank_check(toy, hull, 1, ten)["why"]
+    small = toy.with_changes(**{"hull.ballast_tank_frames": [4, 12]})
+    assert most_internal(small, hull, five) == 3  # floor(4.8 / 2.42) x 3 x 1
+    assert "holds 3" in tank_check(small, hull, 4, five)["why"]
     assert make_space(toy, models=["open_parachute_5t", "open_parachute_10t"]).internal == (0, 6)
 
 

@@ -136,7 +136,7 @@ class Evaluator:
         self.bounds = {m: lower_bound(scenario, self.hull, e["lift_t"])
                        for m, e in space.entries.items()}
         self.fewest = {m: b["n"] for m, b in self.bounds.items()}
-        self.most = {m: most_internal(scenario, self.hull, float(e["lift_t"]))
+        self.most = {m: most_internal(scenario, self.hull, e)
                      for m, e in space.entries.items()}
         self.last = RUNGS.index(options.up_to)
 
@@ -182,7 +182,7 @@ class Evaluator:
                "lift_t": float(entry["lift_t"]), "type": entry["type"],
                "cost": None if None in costs else float(sum(costs)),
                "reached": "statics", "passed": False, "rejected": None}
-        failed = tank_check(self.scenario, self.hull, c.internal, float(entry["lift_t"]))
+        failed = tank_check(self.scenario, self.hull, c.internal, entry)
         if failed is None:
             try:
                 sc = self.scenario_of(c)

@@ -149,7 +149,7 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
                   dump_valve_factors=tuple(dump_factors or (1.0,)),
                   span_m=_span(span, scenario.hull.length_m),
                   entries={m: cat[m] for m in models},
-                  internal=_internal(scenario, internal, [cat[m]["lift_t"] for m in models]),
+                  internal=_internal(scenario, internal, [cat[m] for m in models]),
                   per_point=bool(per_point), supplies=_supplies(supplies))
     if space.per_point:
         mixed.check_one_type(space.entries)
@@ -160,7 +160,7 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
     return space
 
 
-def _internal(scenario, value, lifts_t) -> tuple[int, int]:
+def _internal(scenario, value, entries) -> tuple[int, int]:
     """The range of internal bags: as given (refused on a structure without tanks, or above
     what the tanks hold of every bag offered), else 0..the most (:mod:`~flexlift.design.internal`)."""
     from flexlift.structure.hull import hull_from_scenario
@@ -172,7 +172,7 @@ def _internal(scenario, value, lifts_t) -> tuple[int, int]:
                              "(hull.ballast_tank_frames): 0 internal bags")
         return 0, 0
     hull = hull_from_scenario(scenario)
-    most = max(tanks.most_internal(scenario, hull, float(f)) for f in lifts_t)
+    most = max(tanks.most_internal(scenario, hull, e) for e in entries)
     if value is None:
         return 0, most
     if lo > most:
