@@ -20,7 +20,13 @@ import sys
 import threading
 import time
 
-from flexlift.cli._common import add_scenario_arg, help_text, positive_float, scenario_from
+from flexlift.cli._common import (
+    add_scenario_arg,
+    help_text,
+    positive_float,
+    positive_int,
+    scenario_from,
+)
 from flexlift.cli.broker import account_from, add_account_args
 from flexlift.errors import InputError
 
@@ -56,6 +62,14 @@ def add_parser(sub) -> None:
                    help="--rig: the rig's speed, times real time (default 1)")
     p.add_argument("--lift", default=None, help="the lift's name in the topics "
                    "(default: the scenario's)")
+    p.add_argument("--estimate", action="store_true",
+                   help="run the estimator and fault detector on the readings too "
+                        "(docs/reference/live.md#the-estimator)")
+    p.add_argument("--members", type=positive_int("--members"), default=16,
+                   help="--estimate: ensemble members (default 16)")
+    p.add_argument("--forecast-every", type=positive_float("--forecast-every"),
+                   default=120.0, help="--estimate: a forecast every this many seconds of "
+                   "lift time (default 120)")
     p.add_argument("--no-plan", action="store_true",
                    help="leave the plan's simulation out of the report")
     p.add_argument("--wall-limit", type=positive_float("--wall-limit"), default=math.inf,
@@ -149,6 +163,7 @@ def _run(args, scenario, lift, address, log, until, folder, board):
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
     live.dashboard = board
+    live.estimate = _estimator(args, scenario, master)
     stop, rig_done = threading.Event(), threading.Event()
     if rig is not None:
         rig.link.start()
@@ -165,9 +180,44 @@ def _run(args, scenario, lift, address, log, until, folder, board):
             rig_thread.join(10)
             rig.link.stop()
         link.stop()
+    estimate = None
+    if live.estimate is not None:
+        live.estimate.stop()
+        estimate = live.estimate.summary()
+        _say_estimate(estimate)
     summary = finish_report(folder, scenario, outcome, lift, args.control, not args.no_plan,
-                            rig=rig)
+                            rig=rig, estimate=estimate)
     return outcome, summary
+
+
+def _estimator(args, scenario, master):
+    """The estimator started on the master's plant (``--estimate``), else None."""
+    if not args.estimate:
+        return None
+    from flexlift.estimate.watch import Settings
+    from flexlift.live.estimate import LiveEstimate
+
+    settings = Settings(members=args.members, forecast_every_s=args.forecast_every)
+    settings.check()
+    est = LiveEstimate(scenario, settings, plant=master.plant,
+                       commanded=args.control == "master",
+                       rate=args.speed if args.rig else 1.0).start()
+    _say(f"estimator: {args.members} members, a forecast every {args.forecast_every:g} s")
+    return est
+
+
+def _say_estimate(s: dict) -> None:
+    f = s["forecasts"][-1] if s["forecasts"] else None
+    text = (f"estimator: {len(s['alarms'])} alarms, estimated to t = "
+            f"{s['estimated_to_s'] if s['estimated_to_s'] is not None else '-'} s "
+            f"({s['behind_s'] if s['behind_s'] is not None else '-'} s behind the readings)")
+    if f is not None and f["arrival_time_s"]:
+        a = f["arrival_time_s"]
+        text += (f"; forecast at {f['time_s']:.0f} s: arrival {a['p50']:.0f} s "
+                 f"({a['p5']:.0f}-{a['p95']:.0f}), P(unsafe) {f['p_unsafe']:.2f}")
+    if s["error"]:
+        text += f"; the estimator stopped: {s['error']}"
+    _say(text)
 
 
 def _rig_then_say(rig, stop: threading.Event, done: threading.Event) -> None:
