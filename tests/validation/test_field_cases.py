@@ -2,6 +2,7 @@
 case's shipped scenario run and held inside the band its page states and argues."""
 
 import math
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
@@ -216,7 +217,7 @@ def test_the_study_soil_band_against_the_cases_scatter():
 
 
 # ------------------------------------------------------------------ the summary's numbers
-def test_the_summary_page_quotes_these_runs(grieg, ehime, flange, spool):
+def test_the_summary_page_quotes_these_runs(grieg, ehime, flange, spool, lee):
     """docs/validation/index.md states the runs' numbers: they are these runs' (a change of a
     law that moves them must update the page)."""
     page = (Path(__file__).parents[2] / "docs" / "validation" / "index.md").read_text()
@@ -227,5 +228,39 @@ def test_the_summary_page_quotes_these_runs(grieg, ehime, flange, spool):
               f"{events(ehime)['separation'] / 3600:.2f} h",
               f"breaks the surface {events(flange[1])['surface_breach']:.1f} s",
               f"resettles {events(flange[1])['resettle']:.0f} s"]
+    h, initial = lee[1], CASES["lee2016-vessel"]["initial_lift_MN"]
+    drained = h.force[-1] / 1e6
+    off = 100 * (drained / CASES["lee2016-vessel"]["drained_lift_MN"] - 1)
+    quoted += [f"drained {drained:.3f} MN ({off:+.1f} %".replace("-", "−"),
+               f"peak {h.peak / 1e6 / initial:.2f} × at the keel"]
     for text in quoted:
         assert text in page, text
+    lee_page = (Path(__file__).parents[2] / "docs" / "validation" / "lee-2016.md").read_text()
+    for text in (f"peak of {h.peak / 1e6:.3f} MN", f"({h.drained_time():.0f} s)",
+                 f"weight in air, {h.weight_in_air / 1e6:.3f} MN",
+                 f"{h.peak_time:.0f} s into the"):
+        assert text in lee_page, text
+
+
+def test_the_trapped_water_page_quotes_these_runs(lee):
+    """docs/theory/trapped-water.md's sensitivity tables are these runs: the peak over the
+    initial force (and the time to drain) for each opening and speed, and the volume each
+    pair needs for the measured peak."""
+    sc, h = lee
+    case = CASES["lee2016-vessel"]
+    page = (Path(__file__).parents[2] / "docs" / "theory" / "trapped-water.md").read_text()
+    mass = h.weight_in_air / sc.environment.gravity_m_s2
+    base = trapped.Surfacing(hull_depth_m=sc.hull.depth_m, **sc.surfacing.model_dump())
+    speeds = (0.02, 0.05, 0.1, 0.2)
+    for a in (0.02, 0.05, 0.1, 0.2):
+        cells, volumes = [], []
+        for v in speeds:
+            lift = replace(base, opening_area_m2=a, lift_speed_m_s=v)
+            r = trapped.force_history(mass, lift)
+            ratio = f"{r.peak / 1e6 / case['initial_lift_MN']:.2f}"
+            ratio = f"**{ratio}**" if (a, v) == (0.05, 0.05) else ratio
+            cells.append(f"{ratio} ({(r.drained_time() - r.peak_time) / 60:.0f} min)")
+            fit = trapped.trapped_volume_for_peak(mass, case["peak_lift_MN"] * 1e6, lift)
+            volumes.append(f"{fit:.1f}")
+        assert f"| {a:g} | " + " | ".join(cells) + " |" in page, (a, cells)
+        assert f"| {a:g} | " + " | ".join(volumes) + " |" in page, (a, volumes)
