@@ -122,3 +122,40 @@ def test_the_fit_inverts_the_history():
 def test_bad_input_names_the_field(field, value):
     with pytest.raises(InputError, match=f"surfacing.{field}"):
         replace(BASE, **{field: value})
+
+
+# ------------------------------------------------------------------ the scenario and the CLI
+def test_flexlift_surfacing_prints_writes_and_refuses(tmp_path, capsys):
+    """`flexlift surfacing` on the shipped Lee vessel: its numbers printed and written; a
+    scenario without a surfacing: section, a bad value in one, or a bad --step: one line on
+    stderr naming it, exit 2."""
+    import json
+
+    from flexlift.cli import main
+
+    assert main(["surfacing", "field-lee-vessel", "--json", "--out", str(tmp_path / "o")]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["weight_in_water_MN"] == pytest.approx(0.604, rel=1e-3)
+    assert s["final_MN"] == pytest.approx(s["weight_in_air_MN"], rel=1e-6)
+    written = json.loads((tmp_path / "o" / "surfacing.json").read_text())
+    assert written["peak_MN"] == pytest.approx(s["peak_MN"])
+    rows = (tmp_path / "o" / "tables" / "surfacing.csv").read_text().splitlines()
+    assert rows[0] == "time_s,keel_height_m,level_in_m,waterline_m,force_MN"
+    assert float(rows[1].split(",")[4]) == pytest.approx(s["weight_in_water_MN"], rel=1e-5)
+    assert main(["surfacing", "field-lee-vessel"]) == 0
+    out = capsys.readouterr().out
+    assert "peak 1.380 MN" in out and "weight in air 0.695 MN" in out
+    bad = tmp_path / "bad.yaml"
+    from importlib import resources
+
+    text = (resources.files("flexlift") / "scenarios" / "field-lee-vessel.yaml").read_text()
+    bad.write_text(text.replace("opening_area_m2: 0.05", "opening_area_m2: -1"))
+    for argv, needle in ((["surfacing", "tanker"], "surfacing"),
+                         (["surfacing", str(bad)], "surfacing.opening_area_m2"),
+                         (["surfacing", "field-lee-vessel", "--step", "0"], "--step")):
+        try:
+            code = main(argv)
+        except SystemExit as stop:
+            code = stop.code
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and len(err) == 1 and needle in err[0], (argv, err)
