@@ -22,13 +22,16 @@ SERVER_NAMES = "IP:127.0.0.1,DNS:localhost"
 
 
 class Certificates(NamedTuple):
-    """PEM files: a CA, the broker's certificate signed by it and its key, and a second CA
-    that signed nothing of the broker's."""
+    """PEM files: a CA, the broker's certificate signed by it and its key, a second CA that
+    signed nothing of the broker's, and a certificate (and key) signed by the first CA for
+    another host name only."""
 
     ca: Path
     cert: Path
     key: Path
     other_ca: Path
+    elsewhere_cert: Path
+    elsewhere_key: Path
 
 
 def _openssl(*args: str, cwd: Path) -> None:
@@ -45,22 +48,30 @@ def _ca(folder: Path, name: str) -> Path:
     return folder / f"{name}.pem"
 
 
-def make_certificates(folder: Path) -> Certificates:
-    """A throwaway CA and a broker certificate for :data:`SERVER_NAMES` signed by it (and
-    another CA), made in ``folder`` by ``openssl`` subprocesses."""
-    folder.mkdir(parents=True, exist_ok=True)
-    ca, other = _ca(folder, "ca"), _ca(folder, "other-ca")
-    (folder / "server.ext").write_text(
-        f"subjectAltName={SERVER_NAMES}\nbasicConstraints=critical,CA:FALSE\n"
+def _server(folder: Path, name: str, names: str, serial: int) -> tuple[Path, Path]:
+    """A server certificate for ``names`` (subjectAltName) signed by ca.pem: its .pem, .key."""
+    (folder / f"{name}.ext").write_text(
+        f"subjectAltName={names}\nbasicConstraints=critical,CA:FALSE\n"
         "keyUsage=critical,digitalSignature\nextendedKeyUsage=serverAuth\n"
         "subjectKeyIdentifier=hash\nauthorityKeyIdentifier=keyid\n")
     _openssl("req", "-new", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
-             "-nodes", "-keyout", "server.key", "-out", "server.csr", "-subj", "/CN=localhost",
+             "-nodes", "-keyout", f"{name}.key", "-out", f"{name}.csr", "-subj", f"/CN={name}",
              cwd=folder)
-    _openssl("x509", "-req", "-in", "server.csr", "-CA", "ca.pem", "-CAkey", "ca.key",
-             "-set_serial", "2", "-days", "1", "-extfile", "server.ext", "-out", "server.pem",
-             cwd=folder)
-    return Certificates(ca, folder / "server.pem", folder / "server.key", other)
+    _openssl("x509", "-req", "-in", f"{name}.csr", "-CA", "ca.pem", "-CAkey", "ca.key",
+             "-set_serial", str(serial), "-days", "1", "-extfile", f"{name}.ext",
+             "-out", f"{name}.pem", cwd=folder)
+    return folder / f"{name}.pem", folder / f"{name}.key"
+
+
+def make_certificates(folder: Path) -> Certificates:
+    """A throwaway CA and a broker certificate for :data:`SERVER_NAMES` signed by it,
+    another CA, and a certificate of the first for another name, made in ``folder`` by
+    ``openssl`` subprocesses."""
+    folder.mkdir(parents=True, exist_ok=True)
+    ca, other = _ca(folder, "ca"), _ca(folder, "other-ca")
+    cert, key = _server(folder, "localhost", SERVER_NAMES, 2)
+    return Certificates(ca, cert, key, other,
+                        *_server(folder, "elsewhere", "DNS:elsewhere.invalid", 3))
 
 
 def free_port() -> int:

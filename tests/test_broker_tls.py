@@ -36,23 +36,31 @@ def certificates(tmp_path_factory):
     return make_certificates(tmp_path_factory.mktemp("tls"))
 
 
-@pytest.fixture
-def tls_broker(tmp_path, certificates):
-    """``flexlift broker tanker --lift tk`` with a TLS listener (``--listen 127.0.0.1``),
-    run by Mosquitto; yields (the TLS address, the loopback plain address, the folder
-    written, the certificates); stopped by its PID."""
+def _run_broker(tmp_path, cert, key, ca):
+    """``flexlift broker tanker --lift tk`` with a TLS listener (``--listen 127.0.0.1``)
+    with ``cert`` and ``key``, started by Mosquitto: (the process, the TLS address, the
+    loopback plain address, the folder written)."""
     if not os.access(MOSQUITTO, os.X_OK):
         pytest.skip("Debian's mosquitto is not installed (.ci/run installs it)")
     port, tls_port, out = free_port(), free_port(), tmp_path / "broker"
     me = pwd.getpwuid(os.getuid()).pw_name  # as root, Mosquitto would become "mosquitto"
     assert main(["broker", "tanker", "--lift", "tk", "--out", str(out), "--port", str(port),
                  "--listen", "127.0.0.1", "--network-port", str(tls_port), "--run-as", me,
-                 "--tls-cert", str(certificates.cert), "--tls-key", str(certificates.key),
-                 "--tls-ca", str(certificates.ca)]) == 0
+                 "--tls-cert", str(cert), "--tls-key", str(key), "--tls-ca", str(ca)]) == 0
     broker = Mosquitto(tmp_path, port, conf=out / CONF, more_ports=(tls_port,)).start()
+    return (broker, BrokerAddress("127.0.0.1", tls_port, tls=True),
+            BrokerAddress("127.0.0.1", port), out)
+
+
+@pytest.fixture
+def tls_broker(tmp_path, certificates):
+    """The lift's broker over TLS with a certificate for 127.0.0.1/localhost; yields (the
+    TLS address, the loopback plain address, the folder written, the certificates);
+    stopped by its PID."""
+    broker, address, plain, out = _run_broker(tmp_path, certificates.cert, certificates.key,
+                                              certificates.ca)
     try:
-        yield (BrokerAddress("127.0.0.1", tls_port, tls=True), BrokerAddress("127.0.0.1", port),
-               out, certificates)
+        yield address, plain, out, certificates
     finally:
         broker.stop()
 
@@ -136,6 +144,29 @@ def test_a_client_trusting_another_ca_is_refused_at_once(tls_broker):
         assert not link.start(WAIT_S)
         assert time.monotonic() - began < WAIT_S / 2
         assert link.untrusted and "self-signed certificate in certificate chain" in link.refused
+    finally:
+        link.stop()
+
+
+def test_a_certificate_for_another_host_is_refused(tmp_path, certificates):
+    """Signed by the trusted CA, but naming only elsewhere.invalid: paho checks the name."""
+    c = certificates
+    broker, address, _, out = _run_broker(tmp_path, c.elsewhere_cert, c.elsewhere_key, c.ca)
+    link = _tls_link(address, out, "master", c.ca)
+    try:
+        assert not link.start(WAIT_S)
+        assert link.untrusted and "certificate is not valid for '127.0.0.1'" in link.refused
+    finally:
+        link.stop()
+        broker.stop()
+
+
+def test_tls_to_the_plain_listener_does_not_connect(tls_broker):
+    _, plain, out, certs = tls_broker
+    link = _tls_link(BrokerAddress(plain.host, plain.port, tls=True), out, "master", certs.ca)
+    try:
+        assert not link.start(1.0) and link.refused is None
+        assert wait_until(lambda: link.failure is not None, WAIT_S), link.failure
     finally:
         link.stop()
 

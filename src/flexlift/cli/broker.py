@@ -105,7 +105,7 @@ def _tls(args):
 
 
 def _main(args: argparse.Namespace) -> int:
-    from flexlift.live.deploy import CONF, PASSWORDS, write_broker
+    from flexlift.live.deploy import CONF, PASSWD, PASSWORDS, write_broker
     from flexlift.live.messages import lift_name
     from flexlift.loads.liftplan import plan_lift
     from flexlift.structure.hull import hull_from_scenario
@@ -120,4 +120,9 @@ def _main(args: argparse.Namespace) -> int:
     sys.stdout.write(f"flexlift broker: lift {lift}, {len(files)} accounts (master, rig, "
                      f"hull and {len(bags)} bags), passwords in "
                      f"{os.path.join(args.out, PASSWORDS)}/; start it with: mosquitto -c {out}\n")
+    # Mosquitto started as root reads these after becoming its user (tried: 2.0.11)
+    readable = [os.path.join(args.out, PASSWD), *([tls.keyfile] if tls else [])]
+    user = args.run_as or "mosquitto"
+    sys.stdout.write(f"flexlift broker: started as root, Mosquitto reads {' and '.join(readable)}"
+                     f" as {user}: first chown {user} {' '.join(readable)}\n")
     return 0
