@@ -107,7 +107,7 @@ def test_a_ca_is_for_a_tls_broker_and_must_be_a_certificate(tmp_path, capsys):
                  str(not_pem)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 3 and all("--tls-ca" in line for line in lines), lines
-    assert "mqtts://" in lines[0] and "existing" in lines[1] and "PEM" in lines[2]
+    assert "mqtts://" in lines[0] and "existing" in lines[1] and "NO_CERTIFICATE" in lines[2]
     assert not os.path.exists(out)
 
 
@@ -131,6 +131,7 @@ def test_a_client_without_tls_on_the_tls_port_does_not_connect(tls_broker):
     try:
         assert not link.start(1.0)
         assert wait_until(lambda: link.failure is not None, WAIT_S)  # dropped, not answered
+        assert "closed before the broker answered" in link.failure and "mqtts://" in link.failure
         assert not link.connected.is_set() and link.connects == 0
     finally:
         link.stop()

@@ -84,7 +84,9 @@ class Link:
 
     def _on_disconnect(self, client, userdata, flags, reason, properties) -> None:
         if not self.connected.is_set() and self.refused is None:  # dropped before answering
-            self.failure = f"closed before the broker answered ({reason})"
+            hint = "" if getattr(self.address, "tls", False) else \
+                ": a TLS listener? give mqtts:// and --tls-ca"
+            self.failure = f"closed before the broker answered ({reason}){hint}"
         self.connected.clear()
 
     def _on_message(self, client, userdata, message) -> None:
@@ -156,15 +158,18 @@ def start_or_refuse(link: Link, wait_s: float = 10.0) -> bool:
 
 
 def _tls(client, ca: str | None) -> None:
-    """TLS 1.2 or later on ``client``, trusting the CA certificate in the PEM file ``ca``
-    (None: the system's); InputError naming ``--tls-ca`` if that file holds none."""
+    """TLS 1.2 or later on ``client`` (paho's ``tls_set_context``), trusting the CA
+    certificate in the PEM file ``ca`` (None: the system's), the broker's certificate
+    required and checked against the host dialled; InputError naming ``--tls-ca`` if that
+    file holds no certificate."""
     from flexlift.errors import InputError
 
     try:
-        client.tls_set(ca_certs=ca, cert_reqs=ssl.CERT_REQUIRED,
-                       tls_version=ssl.PROTOCOL_TLS_CLIENT)
+        context = ssl.create_default_context(ssl.Purpose.SERVER_AUTH, cafile=ca)
     except (OSError, ssl.SSLError) as exc:  # SSLError: not a certificate
-        why = getattr(exc, "strerror", None) or getattr(exc, "reason", None) or str(exc)
+        why = getattr(exc, "reason", None) or getattr(exc, "strerror", None) or str(exc)
         raise InputError("--tls-ca", ca, f"give the PEM file of the CA certificate that signed "
                          f"the broker's ({why})") from None
-    client.tls_insecure_set(False)  # the broker's certificate must name the host dialled
+    context.minimum_version = ssl.TLSVersion.TLSv1_2
+    context.verify_mode, context.check_hostname = ssl.CERT_REQUIRED, True
+    client.tls_set_context(context)
