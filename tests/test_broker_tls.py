@@ -284,5 +284,7 @@ def test_live_and_rig_run_the_lift_over_tls_on_their_accounts(tls_broker, tmp_pa
     assert applied and int(applied.group(1)) > 0, (rig_out, rig_err[-2000:])
     everything = live_out + live_err + rig_out + rig_err + report_text + \
         (tmp_path / "live" / "report.md").read_text()
+    log = b"".join(p.read_bytes() for p in (tmp_path / "live").iterdir() if p.is_file())
     for user in ("master", "rig"):
         assert _password(out, user) not in everything
+        assert _password(out, user).encode() not in log  # nor in the log's database
