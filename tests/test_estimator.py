@@ -190,6 +190,31 @@ def test_with_the_true_unknowns_the_forecast_is_the_simulation(tanker):
     assert est.ensemble.step == 1001  # the forecast left the members where they were
 
 
+def test_p_unsafe_is_for_the_rest_of_the_lift(tanker):
+    """A lift that breaks a (lowered) ascent-speed limit after separation: members that are
+    the lift forecast at 100 s give P(unsafe) 1, the breach still to come; the same forks
+    judged from a time after the breach count it as past (``unsafe_already``), not as a
+    risk still ahead."""
+    from flexlift.ascent import simulate
+    from flexlift.estimate.forecast import first_breach, forecast
+
+    slow = tanker.with_changes(**{"limits.ascent_velocity_m_s": 0.1})
+    truth = simulate(slow, control="decentralized", summary_only=True)
+    breach = first_breach(truth.events)
+    assert truth.outcome["kind"] == "unsafe" and breach > 1000.0
+    sensors, readings = _noiseless_log(slow, 120.0)
+    est = Estimator(slow, sensors, members=3, prior=Prior(0.0, 0.0, 0.0, 0.0),
+                    control="decentralized")
+    _replay(est, readings, 2.0, 101.0)
+    f = forecast(est)
+    assert (f["p_unsafe"], f["unsafe_already"]) == (1.0, 0.0)
+    est.t = breach + 1.0  # judged as from just after the breach (the forks run as before)
+    f = forecast(est)
+    assert (f["p_unsafe"], f["unsafe_already"]) == (0.0, 1.0)
+    est.t = breach - 1.0
+    assert forecast(est)["p_unsafe"] == 1.0
+
+
 def test_resampling_keeps_the_unknowns_spread_and_parts_the_copies(tanker):
     """Half the members unlikely: the other half drawn twice each, forks; the hold then
     drawn from Liu and West's kernel: the weighted mean kept, no two members alike, the
