@@ -9,7 +9,8 @@ command). While it runs it serves the dashboard (docs/guide/dashboard.md) on 127
 (``--dashboard PORT``, default a free port, printed; ``--no-dashboard``: none).
 
 Exit codes: 0 when it ended as asked (arrived, the time, or SIGINT), 1 when ``--until
-arrived`` ended without arrival, 2 for bad input.
+arrived`` ended without arrival, 2 for bad input (also when the broker refuses the account,
+or its TLS certificate is not trusted, at the start: nothing is written then).
 """
 
 from __future__ import annotations
@@ -47,7 +48,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("live", help="run a lift over MQTT: read, control, alarm, log",
                        description=help_text(__doc__))
     add_scenario_arg(p)
-    p.add_argument("--broker", default=None, help="mqtt://HOST[:PORT] (default: embedded)")
+    p.add_argument("--broker", default=None, help="mqtt://HOST[:PORT], or mqtts://HOST[:PORT] "
+                   "over TLS (--tls-ca) (default: embedded)")
     p.add_argument("--out", required=True, help="folder of the log and the report")
     p.add_argument("--control", choices=("master", "advise"), default="master")
     p.add_argument("--until", default="arrived", help="arrived (default) or a time [s]")
@@ -101,22 +103,25 @@ def _main(args: argparse.Namespace) -> int:
 
     until = _until(args.until)
     address = parse_broker(args.broker) if args.broker else None
-    args.account = account_from(args)
-    if args.account[0] is not None and (address is None or args.rig):
+    args.account = account_from(args, address)
+    if args.account["username"] is not None and (address is None or args.rig):
         raise InputError("--user", args.user, "an account is for a --broker, without --rig "
                          "(the embedded broker has none; run flexlift rig with its own)")
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
     board = _dashboard(args.dashboard)  # before anything is written: a taken port is refused
-    embedded = None
+    embedded = link = None
     try:
         if address is None:
             embedded = EmbeddedBroker().start()
             address = embedded.address
             _say(f"embedded broker on {address.url}")
+        link = _connect(args, lift, address)  # a refusal: exit 2, nothing written
         with live_folder(args.out, lift) as (folder, log):
-            outcome, summary = _run(args, scenario, lift, address, log, until, folder, board)
+            outcome, summary = _run(args, scenario, lift, link, log, until, folder, board)
     finally:
+        if link is not None:
+            link.stop()
         if board is not None:
             board.stop()
         if embedded is not None:
@@ -142,23 +147,32 @@ def _dashboard(port: int | None):
     return board
 
 
-def _run(args, scenario, lift, address, log, until, folder, board):
+def _connect(args, lift: str, address):
+    """live's link to the broker, started: InputError if the broker refuses it; said if it
+    does not answer yet (it keeps trying)."""
+    from flexlift.live.mqtt import Link, start_or_refuse
+
+    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live", **args.account)
+    if not start_or_refuse(link):
+        _say(f"broker at {address.url} not answering yet ({link.failure}): waiting "
+             "(reconnecting)")
+    return link
+
+
+def _run(args, scenario, lift, link, log, until, folder, board):
     from flexlift.live.master import Master
     from flexlift.live.mqtt import Link
     from flexlift.live.run import finish_report
     from flexlift.live.session import Live
 
     master = Master(scenario)
-    rig_thread, rig = None, None
+    rig_thread, rig, address = None, None, link.address
     if args.rig:
         from flexlift.live.rig import Rig
 
-        rig = Rig(scenario, Link(address, (), "rig"), lift, speed=args.speed)
+        rig = Rig(scenario, Link(address, (), "rig", tls_ca=args.account["tls_ca"]), lift,
+                  speed=args.speed)
         rig.link.topics = [rig.command_topics()]
-    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live", *args.account)
-    if not link.start():
-        why = f"refused ({link.refused})" if link.refused else "not answering"
-        _say(f"broker at {address.url} {why} yet: waiting (reconnecting)")
     live = Live(scenario, link, log, lift, args.control, _say,
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
@@ -179,7 +193,6 @@ def _run(args, scenario, lift, address, log, until, folder, board):
         if rig_thread is not None:
             rig_thread.join(10)
             rig.link.stop()
-        link.stop()
     estimate = None
     if live.estimate is not None:
         live.estimate.stop()
