@@ -32,7 +32,7 @@ from flexlift.errors import LINE_LIMIT, InputError, SimulationError, clean
 
 #: sub-command modules, in the order of the analysis
 COMMANDS = ("run", "modes", "loads", "statics", "reduce", "fuzzy", "simulate", "sweep",
-            "contingency", "design", "rig", "live", "broker", "replay")
+            "contingency", "design", "rig", "live", "broker", "replay", "surfacing")
 
 
 class _Parser(argparse.ArgumentParser):

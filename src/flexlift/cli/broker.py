@@ -6,7 +6,8 @@ which only ``master`` may publish commands and each sensor node only its own rea
 Anonymous clients are refused. It listens on 127.0.0.1:``--port``; ``--listen ADDRESS``
 adds a listener the sensor nodes reach, over TLS with ``--tls-cert/--tls-key/--tls-ca``.
 Then: ``mosquitto -c OUT/mosquitto.conf``, and ``flexlift live ... --user master
---password-file OUT/passwords/master``.
+--password-file OUT/passwords/master`` (from another machine: ``--broker mqtts://HOST:PORT
+--tls-ca CA.pem``).
 
 Exit codes: 0, or 2 for bad input.
 """
@@ -57,23 +58,35 @@ def add_parser(sub) -> None:
 
 
 def add_account_args(p: argparse.ArgumentParser) -> None:
-    """``--user`` and ``--password-file``: an account on a broker written by this command."""
+    """``--user``, ``--password-file`` and ``--tls-ca``: an account on a broker written by
+    this command, and the CA its TLS listener's certificate is signed by."""
     p.add_argument("--user", default=None, help="the broker account (flexlift broker)")
     p.add_argument("--password-file", default=None, metavar="FILE",
                    help="its password (flexlift broker's passwords/USER)")
+    p.add_argument("--tls-ca", default=None, metavar="PEM",
+                   help="an mqtts:// broker: the CA certificate that signed its certificate "
+                        "(default: the system's CAs)")
 
 
-def account_from(args: argparse.Namespace) -> tuple[str | None, str | None]:
-    """(user, password) of ``add_account_args``; InputError if only one is given."""
+def account_from(args: argparse.Namespace, address) -> dict:
+    """The account and TLS settings of ``add_account_args`` for the broker at ``address``
+    (a BrokerAddress, None: the embedded broker) as ``Link``'s keywords ``username``,
+    ``password``, ``tls_ca``; InputError if only one of user and password file is given, or
+    a CA for a broker without TLS."""
     from flexlift.live.deploy import read_password
 
     if (args.user is None) != (args.password_file is None):
         given = "--user" if args.user is not None else "--password-file"
         raise InputError(given, args.user or args.password_file,
                          "give --user and --password-file together")
-    if args.user is None:
-        return None, None
-    return args.user, read_password(args.password_file)
+    if args.tls_ca is not None:
+        if address is None or not address.tls:
+            raise InputError("--tls-ca", args.tls_ca, "a CA is for a broker over TLS: give "
+                             "--broker mqtts://HOST[:PORT]")
+        if not os.path.isfile(args.tls_ca):
+            raise InputError("--tls-ca", args.tls_ca, "give an existing PEM file")
+    password = None if args.user is None else read_password(args.password_file)
+    return {"username": args.user, "password": password, "tls_ca": args.tls_ca}
 
 
 def _tls(args):
@@ -92,7 +105,7 @@ def _tls(args):
 
 
 def _main(args: argparse.Namespace) -> int:
-    from flexlift.live.deploy import CONF, PASSWORDS, write_broker
+    from flexlift.live.deploy import CONF, PASSWD, PASSWORDS, write_broker
     from flexlift.live.messages import lift_name
     from flexlift.loads.liftplan import plan_lift
     from flexlift.structure.hull import hull_from_scenario
@@ -107,4 +120,9 @@ def _main(args: argparse.Namespace) -> int:
     sys.stdout.write(f"flexlift broker: lift {lift}, {len(files)} accounts (master, rig, "
                      f"hull and {len(bags)} bags), passwords in "
                      f"{os.path.join(args.out, PASSWORDS)}/; start it with: mosquitto -c {out}\n")
+    # Mosquitto started as root reads these after becoming its user (tried: 2.0.11)
+    readable = [os.path.join(args.out, PASSWD), *([tls.keyfile] if tls else [])]
+    user = args.run_as or "mosquitto"
+    sys.stdout.write(f"flexlift broker: started as root, Mosquitto reads {' and '.join(readable)}"
+                     f" as {user}: first chown {user} {' '.join(readable)}\n")
     return 0

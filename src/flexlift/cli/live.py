@@ -9,7 +9,8 @@ command). While it runs it serves the dashboard (docs/guide/dashboard.md) on 127
 (``--dashboard PORT``, default a free port, printed; ``--no-dashboard``: none).
 
 Exit codes: 0 when it ended as asked (arrived, the time, or SIGINT), 1 when ``--until
-arrived`` ended without arrival, 2 for bad input.
+arrived`` ended without arrival, 2 for bad input (also when the broker refuses the account,
+or its TLS certificate is not trusted, at the start: nothing is written then).
 """
 
 from __future__ import annotations
@@ -20,7 +21,13 @@ import sys
 import threading
 import time
 
-from flexlift.cli._common import add_scenario_arg, help_text, positive_float, scenario_from
+from flexlift.cli._common import (
+    add_scenario_arg,
+    help_text,
+    positive_float,
+    positive_int,
+    scenario_from,
+)
 from flexlift.cli.broker import account_from, add_account_args
 from flexlift.errors import InputError
 
@@ -41,7 +48,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("live", help="run a lift over MQTT: read, control, alarm, log",
                        description=help_text(__doc__))
     add_scenario_arg(p)
-    p.add_argument("--broker", default=None, help="mqtt://HOST[:PORT] (default: embedded)")
+    p.add_argument("--broker", default=None, help="mqtt://HOST[:PORT], or mqtts://HOST[:PORT] "
+                   "over TLS (--tls-ca) (default: embedded)")
     p.add_argument("--out", required=True, help="folder of the log and the report")
     p.add_argument("--control", choices=("master", "advise"), default="master")
     p.add_argument("--until", default="arrived", help="arrived (default) or a time [s]")
@@ -56,6 +64,14 @@ def add_parser(sub) -> None:
                    help="--rig: the rig's speed, times real time (default 1)")
     p.add_argument("--lift", default=None, help="the lift's name in the topics "
                    "(default: the scenario's)")
+    p.add_argument("--estimate", action="store_true",
+                   help="run the estimator and fault detector on the readings too "
+                        "(docs/reference/live.md#the-estimator)")
+    p.add_argument("--members", type=positive_int("--members"), default=16,
+                   help="--estimate: ensemble members (default 16)")
+    p.add_argument("--forecast-every", type=positive_float("--forecast-every"),
+                   default=120.0, help="--estimate: a forecast every this many seconds of "
+                   "lift time (default 120)")
     p.add_argument("--no-plan", action="store_true",
                    help="leave the plan's simulation out of the report")
     p.add_argument("--wall-limit", type=positive_float("--wall-limit"), default=math.inf,
@@ -87,22 +103,25 @@ def _main(args: argparse.Namespace) -> int:
 
     until = _until(args.until)
     address = parse_broker(args.broker) if args.broker else None
-    args.account = account_from(args)
-    if args.account[0] is not None and (address is None or args.rig):
+    args.account = account_from(args, address)
+    if args.account["username"] is not None and (address is None or args.rig):
         raise InputError("--user", args.user, "an account is for a --broker, without --rig "
                          "(the embedded broker has none; run flexlift rig with its own)")
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
     board = _dashboard(args.dashboard)  # before anything is written: a taken port is refused
-    embedded = None
+    embedded = link = None
     try:
         if address is None:
             embedded = EmbeddedBroker().start()
             address = embedded.address
             _say(f"embedded broker on {address.url}")
+        link = _connect(args, lift, address)  # a refusal: exit 2, nothing written
         with live_folder(args.out, lift) as (folder, log):
-            outcome, summary = _run(args, scenario, lift, address, log, until, folder, board)
+            outcome, summary = _run(args, scenario, lift, link, log, until, folder, board)
     finally:
+        if link is not None:
+            link.stop()
         if board is not None:
             board.stop()
         if embedded is not None:
@@ -128,27 +147,37 @@ def _dashboard(port: int | None):
     return board
 
 
-def _run(args, scenario, lift, address, log, until, folder, board):
+def _connect(args, lift: str, address):
+    """live's link to the broker, started: InputError if the broker refuses it; said if it
+    does not answer yet (it keeps trying)."""
+    from flexlift.live.mqtt import Link, start_or_refuse
+
+    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live", **args.account)
+    if not start_or_refuse(link):
+        _say(f"broker at {address.url} not answering yet ({link.failure}): waiting "
+             "(reconnecting)")
+    return link
+
+
+def _run(args, scenario, lift, link, log, until, folder, board):
     from flexlift.live.master import Master
     from flexlift.live.mqtt import Link
     from flexlift.live.run import finish_report
     from flexlift.live.session import Live
 
     master = Master(scenario)
-    rig_thread, rig = None, None
+    rig_thread, rig, address = None, None, link.address
     if args.rig:
         from flexlift.live.rig import Rig
 
-        rig = Rig(scenario, Link(address, (), "rig"), lift, speed=args.speed)
+        rig = Rig(scenario, Link(address, (), "rig", tls_ca=args.account["tls_ca"]), lift,
+                  speed=args.speed)
         rig.link.topics = [rig.command_topics()]
-    link = Link(address, [f"flexlift/{lift}/sensor/#"], "live", *args.account)
-    if not link.start():
-        why = f"refused ({link.refused})" if link.refused else "not answering"
-        _say(f"broker at {address.url} {why} yet: waiting (reconnecting)")
     live = Live(scenario, link, log, lift, args.control, _say,
                 rate=args.speed if args.rig else None, periods=rig and rig.periods(),
                 master=master)
     live.dashboard = board
+    live.estimate = _estimator(args, scenario, master)
     stop, rig_done = threading.Event(), threading.Event()
     if rig is not None:
         rig.link.start()
@@ -164,10 +193,44 @@ def _run(args, scenario, lift, address, log, until, folder, board):
         if rig_thread is not None:
             rig_thread.join(10)
             rig.link.stop()
-        link.stop()
+    estimate = None
+    if live.estimate is not None:
+        live.estimate.stop()
+        estimate = live.estimate.summary()
+        _say_estimate(estimate)
     summary = finish_report(folder, scenario, outcome, lift, args.control, not args.no_plan,
-                            rig=rig)
+                            rig=rig, estimate=estimate)
     return outcome, summary
+
+
+def _estimator(args, scenario, master):
+    """The estimator started on the master's plant (``--estimate``), else None."""
+    if not args.estimate:
+        return None
+    from flexlift.estimate.watch import Settings
+    from flexlift.live.estimate import LiveEstimate
+
+    settings = Settings(members=args.members, forecast_every_s=args.forecast_every)
+    settings.check()
+    est = LiveEstimate(scenario, settings, plant=master.plant,
+                       commanded=args.control == "master",
+                       rate=args.speed if args.rig else 1.0).start()
+    _say(f"estimator: {args.members} members, a forecast every {args.forecast_every:g} s")
+    return est
+
+
+def _say_estimate(s: dict) -> None:
+    f = s["forecasts"][-1] if s["forecasts"] else None
+    text = (f"estimator: {len(s['alarms'])} alarms, estimated to t = "
+            f"{s['estimated_to_s'] if s['estimated_to_s'] is not None else '-'} s "
+            f"({s['behind_s'] if s['behind_s'] is not None else '-'} s behind the readings)")
+    if f is not None and f["arrival_time_s"]:
+        a = f["arrival_time_s"]
+        text += (f"; forecast at {f['time_s']:.0f} s: arrival {a['p50']:.0f} s "
+                 f"({a['p5']:.0f}-{a['p95']:.0f}), P(unsafe) {f['p_unsafe']:.2f}")
+    if s["error"]:
+        text += f"; the estimator stopped: {s['error']}"
+    _say(text)
 
 
 def _rig_then_say(rig, stop: threading.Event, done: threading.Event) -> None:

@@ -5,7 +5,8 @@ the valve commands it receives, running the scenario's faults without telling an
 ends when the simulated run ends (``simulation.duration_s``, or the target held), at
 ``--wall-limit``, or on SIGINT; then it prints what happened to the plant.
 
-Exit codes: 0, or 2 for bad input.
+Exit codes: 0, or 2 for bad input (also when the broker refuses the account, or its TLS
+certificate is not trusted, at the start).
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("rig", help="a simulated lift on MQTT: sensors out, valve commands in",
                        description=help_text(__doc__))
     add_scenario_arg(p)
-    p.add_argument("--broker", required=True, help="mqtt://HOST[:PORT]")
+    p.add_argument("--broker", required=True,
+                   help="mqtt://HOST[:PORT], or mqtts://HOST[:PORT] over TLS (--tls-ca)")
     p.add_argument("--speed", type=positive_float("--speed"), default=1.0,
                    help="times real time (default 1)")
     p.add_argument("--lift", default=None, help="the lift's name in the topics "
@@ -37,19 +39,19 @@ def add_parser(sub) -> None:
 def _main(args: argparse.Namespace) -> int:
     from flexlift.live.broker import parse_broker
     from flexlift.live.messages import lift_name
-    from flexlift.live.mqtt import Link
+    from flexlift.live.mqtt import Link, start_or_refuse
     from flexlift.live.rig import Rig
 
     address = parse_broker(args.broker)
-    account = account_from(args)
+    account = account_from(args, address)
     scenario = scenario_from(args)
     lift = lift_name(args.lift or scenario.name)
-    link = Link(address, (), "rig", *account)
+    link = Link(address, (), "rig", **account)
     rig = Rig(scenario, link, lift, speed=args.speed)
     link.topics = [rig.command_topics()]
-    if not link.start():
-        why = f"refused ({link.refused})" if link.refused else "not answering"
-        sys.stdout.write(f"flexlift rig: broker at {address.url} {why} yet: reconnecting\n")
+    if not start_or_refuse(link):  # refused (a wrong account, an untrusted broker): exit 2
+        sys.stdout.write(f"flexlift rig: broker at {address.url} not answering yet "
+                         f"({link.failure}): reconnecting\n")
     sys.stdout.write(f"flexlift rig: lift {lift} on {address.url} at {args.speed:g}x, "
                      f"{len(rig.tap.sensors)} sensors\n")
     sys.stdout.flush()

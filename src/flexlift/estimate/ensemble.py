@@ -68,6 +68,8 @@ class Ensemble:
             # pipeline, M of several MN m at the free end): not until both take it
             raise ValueError(f"the submerged weight as an unknown (Prior.weight = "
                              f"{prior.weight}) is not supported yet: use 0")
+        if scenario.faults:  # the members are the lift as planned: finding faults is the
+            scenario = scenario.with_changes(faults=[])  # detector's, not the members' script
         self.scenario = scenario
         self.prior = prior or Prior()
         self.plant = plant if plant is not None else coupled_plant(scenario)

@@ -24,6 +24,7 @@ from flexlift.ascent.loop import COMMANDED
 from flexlift.ascent.result import BAG_VARS, HULL_VARS
 from flexlift.estimate.enkf import analysis
 from flexlift.estimate.ensemble import PARTS, Ensemble, Prior
+from flexlift.physics.gas import moles_rate, purge_flow
 from flexlift.sensors.truth import true_values
 
 _BAG = {name: j for j, name in enumerate(BAG_VARS)}
@@ -40,6 +41,11 @@ GATE = 6.0
 OUTLIER = 3.0
 #: the most a lost ensemble's motion spread is widened by at one update [-]
 WIDEN_MAX = 2.0
+#: commanded members: each member's fill is the command times (1 + e), e ~ N(0, this) drawn
+#: per member and command [-]: the valve's own accuracy (its timing:
+#: :meth:`Estimator.command`'s ``delay_s``), process noise that keeps the members' gas spread
+#: from collapsing below what the load cells can tell
+FILL_SPREAD = 0.02
 #: relaxation to the prior's perturbations (RTPP, Zhang et al. 2004): the members' anomalies
 #: after each update are this fraction theirs before it, the rest theirs after [-] (keeps the
 #: ensemble from collapsing; a convex mixture, so it never inflates what readings do not see)
@@ -215,17 +221,40 @@ class Estimator:
                 key = (self.sensors[self.by_name[r.sensor]].bag, q)
                 if key not in latest or r.time_s >= latest[key][0]:
                     latest[key] = (r.time_s, r.value)
-        index = {name: i for i, name in enumerate(self.names)}
         for (bag, q), (_, value) in latest.items():
-            j = self.valves.get(bag)
-            if j is None:
-                continue
-            for run in self.ensemble.runs:
-                if q == "fill_flow":  # the meter's free air at the member's bag pressure
-                    p_atm = run.records.bags.p_atm
-                    run.command(j, fill=max(value, 0.0) * p_atm / run.state.p[index[bag]])
-                else:
-                    run.command(j, opening=value)
+            self.command(bag, "fill" if q == "fill_flow" else "purge", value)
+
+    def command(self, bag: str, valve: str, value: float, free_air: bool = True,
+                delay_s: float = 0.0) -> None:
+        """Commanded members: ``bag``'s ``valve`` set on every member from now on: ``fill``
+        [m^3/s: of free air (a flow meter's reading), commanded at the member's bag
+        pressure, Boyle; or, ``free_air`` False, at the bag's pressure already (a command
+        as sent); each member's times its own draw of :data:`FILL_SPREAD`] or ``purge``
+        opening [-]. A bag not controlled, or members not commanded, take nothing.
+
+        ``delay_s`` [s]: the command reaches the valve some time within this after it was
+        sent (its travel, the valve's next cycle). Each member draws its own delay d, uniform
+        in [0, ``delay_s``], and its gas is given what the old setting would have moved in d:
+        d p (Q_old - Q_new) / (R T), the flows at the bag's pressure (the timing's process
+        noise: the members part as the lift's own timing is unknown)."""
+        j = self.valves.get(bag)
+        if j is None:
+            return
+        i = self.names.index(bag)
+        m = self.ensemble.m
+        spread = np.maximum(1.0 + FILL_SPREAD * self.rng.standard_normal(m), 0.0)
+        late = self.rng.uniform(0.0, delay_s, m) if delay_s > 0 else np.zeros(m)
+        for k, run in enumerate(self.ensemble.runs):
+            before = _flow(run, i, j)
+            if valve == "fill":
+                scale = run.records.bags.p_atm / run.state.p[i] if free_air else 1.0
+                run.command(j, fill=max(value, 0.0) * scale * spread[k])
+            else:
+                run.command(j, opening=value)
+            if late[k] > 0.0:
+                dn = late[k] * moles_rate(run.state.p[i], before - _flow(run, i, j), 0.0,
+                                          run.records.bags.RT)
+                run.state.n[i] = max(run.state.n[i] + dn, 0.0)
 
     def _count(self, readings, observed, used) -> None:
         c = self.counts
@@ -276,6 +305,17 @@ class Estimator:
         rows["leak"] = [run.switches.leak.copy() for run in ens.runs]
         return {name: np.percentile(np.array(v), [5, 50, 95], axis=0)
                 for name, v in rows.items()}
+
+
+def _flow(run, i: int, j: int) -> float:
+    """Bag ``i``'s net gas flow into it [m^3/s at its pressure] from its valves as set
+    (controlled bag ``j``): the fill (if supplied) less the purge."""
+    cs, bags = run.control_state, run.records.bags
+    fill = float(cs.fill[j]) * float(run.switches.supply[i])
+    opening = float(cs.opening[j])
+    purge = (purge_flow(opening, float(run.state.V[i]), float(bags.capacity[i]),
+                        float(bags.purge_max[i])) if opening > 0.0 else 0.0)
+    return fill - purge
 
 
 def gated(Y, z, sigma, observed) -> np.ndarray:

@@ -3,7 +3,8 @@
 :func:`forecast` forks every member (:meth:`flexlift.ascent.loop.Ascent.fork`: the members
 stay where they are), runs the forks to their ends together
 (:func:`flexlift.ascent.batch.advance_batch`: one compiled call per chunk for all) under the
-members' own control, and reads each fork's result as a simulation's: its separation and
+members' own control (``under``: the scenario's controller; for commanded members, the
+commands as they stand, held), and reads each fork's result as a simulation's: its separation and
 breakout time, each bag's arrival, the largest ascent speed and pitch from now on and its
 outcome. P(unsafe) is for the rest of the lift: a member counts when its lift ends unsafe
 and its first breach (a speed or pitch limit, a surface breach, a resettle) comes at or after
@@ -20,6 +21,7 @@ import math
 import numpy as np
 
 from flexlift.ascent.batch import advance_batch
+from flexlift.ascent.loop import COMMANDED
 from flexlift.errors import SimulationError
 
 #: the events that break a limit at their time (:func:`flexlift.ascent.result.explain`)
@@ -57,7 +59,10 @@ def forecast(estimator) -> dict:
             results.append(error.partial)
     names = list(ens.plant.names)
     arrival = {name: [] for name in names}
-    out = {"time_s": round(now, 3), "members": len(results)}
+    mode = ens.runs[0].mode
+    out = {"time_s": round(now, 3), "members": len(results),
+           "under": "the commands as they stand, held" if mode == COMMANDED
+           else f"the {mode} controller"}
     sep, brk, last, vmax, pmax, unsafe, already = [], [], [], [], [], 0, 0
     for res in results:
         h = res.headline

@@ -65,7 +65,8 @@ class Watch:
         Readings that came after their window was taken.
     """
 
-    def __init__(self, scenario, settings: Settings, plant=None, progress=None):
+    def __init__(self, scenario, settings: Settings, plant=None, progress=None,
+                 control: str | None = None, command_delay_s: float | None = None):
         settings.check()
         if plant is None:
             from flexlift.ascent.plant import coupled_plant
@@ -73,7 +74,7 @@ class Watch:
             plant = coupled_plant(scenario)  # the one plant: the sensors' and every member's
         self.settings, self.progress = settings, progress
         self.est = Estimator(scenario, sensors_of(scenario, plant.names, for_log=True),
-                             settings.members, settings.seed, plant=plant)
+                             settings.members, settings.seed, plant=plant, control=control)
         self.names = list(self.est.names)
         self.detector = Detector(self.est.sensors, self.names, settings.false_alarms_per_hour)
         self.window = window_steps(scenario, settings.window_s)
@@ -82,6 +83,18 @@ class Watch:
         self.t_end, self.buffer, self.late = self.window, [], 0
         self.history, self.forecasts, self.alarms = [], [], []
         self.next_forecast = settings.forecast_every_s or math.inf
+        self.commands: list[tuple[float, str, str, float]] = []  # not yet applied
+        # commanded members: a valve's feedback is judged against its command by live's own
+        # not_obeyed alarm; against members set at the command's send time it would flag the
+        # command's travel time as a fault (the feedback goes to the detector unpredicted)
+        self.valve_sensors = ({s.name for s in self.est.sensors
+                               if s.quantity in ("fill_flow", "purge")}
+                              if self.est.valves else set())
+        self.latest = -math.inf  # the latest reading's time [s]
+        #: a command sent reaches its valve within this [s] (default a control period: the
+        #: rig's next chunk, a valve's next cycle)
+        self.delay_s = (1.0 / scenario.control.sample_rate_Hz if command_delay_s is None
+                        else float(command_delay_s))
 
     @property
     def known(self) -> set[str]:
@@ -100,7 +113,14 @@ class Watch:
         while reading.time_s > self.t_end + self.horizon + 1e-9 and self.t_end < self.length:
             self._take()
         self.buffer.append(reading)
+        self.latest = max(self.latest, reading.time_s)
         return self.alarms[before:]
+
+    def command(self, time_s: float, bag: str, valve: str, value: float) -> None:
+        """A valve command sent at ``time_s`` [s] (``valve`` fill [m^3/s at the bag's
+        pressure, as the loop's controllers give it] or purge [-]): commanded members take it
+        at its time, when their window is taken."""
+        self.commands.append((time_s, bag, valve, value))
 
     def flush(self) -> list:
         """Take the windows still holding readings (the stream has ended); the alarms
@@ -112,9 +132,14 @@ class Watch:
 
     def _take(self) -> None:
         t, est, detector = self.t_end, self.est, self.detector
+        self._commanded(t)
         for p in est.assimilate(t, self.buffer):
-            self.alarms.extend(detector.update(_reading(p), p.mean, p.std))
-        self.alarms.extend(detector.tick(t))
+            if p.sensor in self.valve_sensors:
+                self.alarms.extend(detector.update(_reading(p), None, None))
+            else:
+                self.alarms.extend(detector.update(_reading(p), p.mean, p.std))
+        # silence is judged up to the latest reading, not past the stream's end
+        self.alarms.extend(detector.tick(min(t, self.latest)))
         self.history.append((t, est.state()))
         if t >= self.next_forecast:
             self.forecasts.append(forecast(est))
@@ -123,6 +148,17 @@ class Watch:
             self.progress(min(t / self.length, 1.0))
         self.buffer = [r for r in self.buffer if r.time_s > t]
         self.t_end += self.window
+
+
+    def _commanded(self, t: float) -> None:
+        """The commands sent up to ``t`` [s], each applied with the members advanced to its
+        time (a command before the members' time acts from their time: it came late)."""
+        due = sorted(c for c in self.commands if c[0] <= t)
+        self.commands = [c for c in self.commands if c[0] > t]
+        ens = self.est.ensemble
+        for time_s, bag, valve, value in due:
+            ens.advance(max(int(round(time_s / ens.dt)) + 1, ens.step))
+            self.est.command(bag, valve, value, free_air=False, delay_s=self.delay_s)
 
 
 def _reading(p):

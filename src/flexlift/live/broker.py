@@ -20,30 +20,38 @@ from flexlift.errors import InputError
 START_TIMEOUT_S = 10.0
 
 
+#: the URL schemes of a broker and their default ports: plain MQTT, MQTT over TLS
+SCHEMES = {"mqtt": 1883, "mqtts": 8883}
+
+
 class BrokerAddress(NamedTuple):
-    """Where a broker listens."""
+    """Where a broker listens, and whether it speaks TLS there (``mqtts://``)."""
 
     host: str
     port: int
+    tls: bool = False
 
     @property
     def url(self) -> str:
-        """As ``mqtt://host:port``."""
-        return f"mqtt://{self.host}:{self.port}"
+        """As ``mqtt://host:port`` (``mqtts://`` with TLS)."""
+        return f"{'mqtts' if self.tls else 'mqtt'}://{self.host}:{self.port}"
 
 
 def parse_broker(url: str) -> BrokerAddress:
-    """``mqtt://host[:port]`` (or ``host[:port]``) as an address; InputError naming
-    ``--broker`` otherwise."""
+    """``mqtt://host[:port]`` (or ``host[:port]``; port 1883 by default) or, over TLS,
+    ``mqtts://host[:port]`` (port 8883) as an address; InputError naming ``--broker``
+    otherwise."""
     text = url if "://" in url else f"mqtt://{url}"
     try:
         parts = urlsplit(text)
-        port = parts.port or 1883
+        port = SCHEMES.get(parts.scheme) if parts.port is None else parts.port
     except ValueError:
         parts, port = None, None
-    if parts is None or parts.scheme != "mqtt" or not parts.hostname or port is None:
-        raise InputError("--broker", url, "use mqtt://HOST[:PORT] (TLS: a local bridge)")
-    return BrokerAddress(parts.hostname, port)
+    if parts is None or parts.scheme not in SCHEMES or not parts.hostname or not port \
+            or parts.username is not None or parts.path not in ("", "/"):
+        raise InputError("--broker", url, "use mqtt://HOST[:PORT], or mqtts://HOST[:PORT] "
+                         "over TLS (an account: --user and --password-file)")
+    return BrokerAddress(parts.hostname, port, parts.scheme == "mqtts")
 
 
 def free_port(host: str = "127.0.0.1") -> int:

@@ -162,6 +162,9 @@ def mosquitto_conf(folder: str, port: int = 1883, listen: str | None = None,
              f"listener {int(port)} 127.0.0.1"]
     if listen is not None:
         net = network_port or (8883 if tls else int(port) + 1)
+        if int(net) == int(port):  # the two listeners would share it: Mosquitto stops
+            raise InputError("--network-port", int(net), f"the loopback listener has port "
+                             f"{int(port)} (--port): give another")
         lines += ["", f"listener {int(net)} {listen}"]
         if tls is not None:
             lines += [f"certfile {tls.certfile}", f"keyfile {tls.keyfile}",

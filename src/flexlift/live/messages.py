@@ -5,8 +5,8 @@ Readings: topic ``flexlift/<lift>/sensor/<bag or hull>/<quantity>``, payload JSO
 ``value`` in SI units (:data:`QUANTITIES`). Commands: topic
 ``flexlift/<lift>/command/<bag>/fill|purge``, payload ``{"seq": ..., "time": ..., "value":
 ...}``: a sequence number (an integer growing with every command the controller sends), the
-controller's time [s since filling began] and the set-point (fill: free air [m^3/s]; purge:
-valve opening [-]).
+controller's time [s since filling began] and the set-point (fill: the gas flow into the bag at its own pressure [m^3/s], as
+the loop's controllers give it; purge: valve opening [-]).
 
 Parsing never raises: a message that is not a reading or a command of this lift is counted
 by its reason (:class:`Tally`) and dropped.
@@ -61,7 +61,7 @@ class Reading(NamedTuple):
 
 class Command(NamedTuple):
     """One valve command: ``seq`` (its number), ``time`` [s], ``bag``, ``valve`` (fill or
-    purge), ``value`` (fill [m^3/s of free air]; purge opening [-])."""
+    purge), ``value`` (fill [m^3/s at the bag's pressure]; purge opening [-])."""
 
     seq: int
     time: float

@@ -52,3 +52,29 @@ def report_text(lift: dict, plan: dict | None) -> str:
                 f"alarms {lift['alarms'] or 'none'}, control periods with stale readings "
                 f"{lift['stale_periods']}.", ""]
     return "\n".join(out)
+
+
+def _band(b: dict | None) -> str:
+    return "-" if not b else f"{b['p50']:.0f} s ({b['p5']:.0f}-{b['p95']:.0f})"
+
+
+def estimate_text(est: dict | None) -> str:
+    """The estimator's part of the report (Markdown): its alarms, then its forecasts."""
+    if est is None:
+        return ""
+    out = ["## What the estimator made of the readings", ""]
+    out += [f"- {a['time_s']:.1f} s: **{a['kind']}** at {a['bag']} (confidence "
+            f"{a['confidence']:.2f}): {a['message']}; {a['advice']}" for a in est["alarms"]]
+    if not est["alarms"]:
+        out.append("No fault detected.")
+    out += ["", "| forecast at [s] | breakout | last arrival | P(unsafe) still to come |",
+            "|---|---|---|---|"]
+    out += [f"| {f['time_s']:.0f} | {_band(f['breakout_time_s'])} | "
+            f"{_band(f['arrival_time_s'])} | {f['p_unsafe']:.2f} |" for f in est["forecasts"]]
+    c = est["filter"]
+    out += ["", f"Estimated to {est['estimated_to_s']} s, {est['behind_s']} s behind the latest "
+                f"reading; readings assimilated {c['assimilated']}, gated {c['gated']}, late "
+                f"{c['late']}; left unread {est['unread']}, dropped (queue full) "
+                f"{est['dropped_queue_full']}."
+            + (f" The estimator stopped: {est['error']}." if est["error"] else ""), ""]
+    return "\n".join(out)

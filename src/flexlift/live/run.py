@@ -10,7 +10,7 @@ import time
 
 from flexlift.errors import InputError
 from flexlift.live.log import LiveLog
-from flexlift.live.report import lift_summary, plan_summary, report_text
+from flexlift.live.report import estimate_text, lift_summary, plan_summary, report_text
 from flexlift.output.folders import incremental_folder
 from flexlift.plumbing.atomic import write_json, write_text
 
@@ -35,14 +35,17 @@ def live_folder(out, lift: str):
 
 
 def finish_report(folder, scenario, outcome, lift: str, control: str, plan: bool,
-                  rig=None) -> dict:
-    """Write report.json and report.md of a finished run; the summary."""
+                  rig=None, estimate: dict | None = None) -> dict:
+    """Write report.json and report.md of a finished run; the summary (``estimate``: the
+    estimator's, :meth:`flexlift.live.estimate.LiveEstimate.summary`)."""
     summary = {"lift": lift_summary(outcome, lift, control)}
     if rig is not None and rig.result is not None:
         summary["rig"] = {"outcome": rig.result.outcome.get("kind"),
                           "max_ascent_velocity_ms": rig.result.headline["max_ascent_velocity_ms"],
                           "max_pitch_deg": rig.result.headline["max_pitch_deg"]}
     summary["plan"] = plan_summary(scenario) if plan else None
+    summary["estimate"] = estimate
     write_json(folder / "report.json", summary)
-    write_text(folder / "report.md", report_text(summary["lift"], summary["plan"]))
+    write_text(folder / "report.md", report_text(summary["lift"], summary["plan"])
+               + estimate_text(estimate))
     return summary

@@ -85,6 +85,7 @@ class Live:
         self._range: dict[str, str] = {}
         self.dashboard = None  # a started flexlift.live.dashboard.Dashboard, or None
         self.first_depth: dict[str, float] = {}  # each bag's first depth read (live/view.py)
+        self.estimate = None  # a started flexlift.live.estimate.LiveEstimate, or None
 
     def read(self) -> None:
         """Take every message received since the last call."""
@@ -99,6 +100,8 @@ class Live:
                 continue
             late = self.board.add(reading, wall)
             self.log.reading(recv, reading, late)
+            if self.estimate is not None:
+                self.estimate.put(reading.time, reading.sensor, reading.value)
             why = self.alarms.reading(reading)
             if why is not None:
                 self._range[reading.sensor] = why
@@ -113,6 +116,8 @@ class Live:
             self.link.publish(command_topic(self.lift, bag, valve),
                               command_payload(self.seq, t, value), qos=QOS_COMMAND)
         self.log.command(time.time(), command, sent)
+        if sent and self.estimate is not None:
+            self.estimate.put_command(t, bag, valve, value)
         self.commands += 1
         self.alarms.command_changed(bag, "fill_flow" if valve == "fill" else "purge")
 
@@ -164,11 +169,21 @@ class Live:
             self.log.alarm(time.time(), t_a, kind, source, text)
             self.say(f"t = {t_a:.1f} s: ALARM {kind} {source}: {text}")
         self._range = {}
+        if self.estimate is not None:
+            self._estimated()
         if self.dashboard is not None:
             from flexlift.live.view import snapshot_of
 
             self.dashboard.publish(snapshot_of(self, t))
         self.log.tick()
+
+    def _estimated(self) -> None:
+        """The estimator's alarms raised since the last period: logged (kind, bag, the
+        message with its confidence and the advice) and said."""
+        for a in self.estimate.new_alarms():
+            text = f"{a.message} (confidence {a.confidence:.2f}); {a.advice}"
+            self.log.alarm(time.time(), a.time_s, f"estimator:{a.kind}", a.bag, text)
+            self.say(f"t = {a.time_s:.1f} s: ESTIMATOR {a.kind} {a.bag}: {text}")
 
     def arrived(self) -> bool:
         """Every controlled bag within the arrival tolerance of the target."""

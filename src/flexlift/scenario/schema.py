@@ -50,6 +50,7 @@ from flexlift.scenario.file import decode, dump_sections, dump_yaml, load_yaml, 
 from flexlift.scenario.messages import first_error, format_error
 from flexlift.scenario.pipe import Pipe, derive, underive
 from flexlift.scenario.sensors import Sensors
+from flexlift.scenario.surfacing import Surfacing
 from flexlift.scenario.types import (
     MAX_BAG_LIFT_T,
     MAX_ELEMENTS,
@@ -603,6 +604,8 @@ class Scenario(_Section):
     disturbance: Disturbance = Disturbance()
     simulation: Simulation = Simulation()
     sensors: Sensors | None = None  # the lift's sensors (scenario/sensors.py); none: none
+    # the final lift out of the water with its trapped water (scenario/surfacing.py); none: none
+    surfacing: Surfacing | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -685,6 +688,8 @@ class Scenario(_Section):
         data = self.model_dump(mode="json")
         if data.get("sensors") is None:  # no sensors: the text of a scenario before them
             data.pop("sensors", None)
+        if data.get("surfacing") is None:  # likewise no final lift
+            data.pop("surfacing", None)
         return dump_yaml(data)
 
     def checksum(self) -> str:
@@ -694,6 +699,8 @@ class Scenario(_Section):
         data = self.model_dump(mode="json")
         if data.get("sensors") is None:  # no sensors: the checksum of a scenario before them
             data.pop("sensors", None)
+        if data.get("surfacing") is None:  # likewise no final lift
+            data.pop("surfacing", None)
         for key, path in self.controller_files().items():
             section, sub_, _ = key.split(".")
             data[section][sub_]["fis_file"] = "sha256:" + file_sha256(path)
