@@ -215,6 +215,34 @@ def test_p_unsafe_is_for_the_rest_of_the_lift(tanker):
     assert forecast(est)["p_unsafe"] == 1.0
 
 
+def test_the_forecast_under_the_controllers_advice_takes_over_from_now(tanker):
+    """Commanded members whose valves were never opened, at 100 s: held as they stand, the
+    hull never separates; under the controller's advice (``Ascent.fork(mode)``: the
+    controller taking over now) the lift is the controlled lift 100 s late, to its step."""
+    from flexlift.ascent import simulate
+    from flexlift.ascent.loop import COMMANDED
+    from flexlift.estimate.forecast import forecast
+
+    truth = simulate(tanker, control="coordinated", summary_only=True)
+    plant = coupled_plant(tanker)
+    est = Estimator(tanker, sensors_of(tanker, plant.names, for_log=True), members=3,
+                    prior=Prior(0.0, 0.0, 0.0, 0.0), control=COMMANDED, plant=plant)
+    est.ensemble.advance(1001)
+    est.t = 100.0
+    held = forecast(est)
+    assert held["under"] == "the commands as they stand, held"
+    assert held["separation_time_s"] is None and held["arrival_time_s"] is None
+    advice = forecast(est, "coordinated")
+    assert advice["under"] == "the coordinated controller, taking over now"
+    late = advice["separation_time_s"]["p50"] - truth.headline["separation_time_s"]
+    assert abs(late - 100.0) <= 0.2  # 100 s late, to the recorded 0.1 s
+    last = float(np.max(truth.dataset.arrival_time.values))
+    assert abs(advice["arrival_time_s"]["p50"] - last - 100.0) <= 0.2
+    with pytest.raises(ValueError, match="takes over"):
+        forecast(est, "paper")
+    assert est.ensemble.step == 1001  # neither forecast moved the members
+
+
 def test_resampling_keeps_the_unknowns_spread_and_parts_the_copies(tanker):
     """Half the members unlikely: the other half drawn twice each, forks; the hold then
     drawn from Liu and West's kernel: the weighted mean kept, no two members alike, the

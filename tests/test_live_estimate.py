@@ -52,6 +52,10 @@ def test_live_estimate_names_a_rupture_within_30_s_and_nothing_before(tmp_path):
     assert est["estimated_to_s"] >= 298.0 and est["behind_s"] < 5.0
     assert [f["time_s"] for f in est["forecasts"]][:2] == [100.0, 200.0]  # 300: the last
     assert all(f["under"] == "the commands as they stand, held" for f in est["forecasts"])
+    for f in est["forecasts"]:  # and under the controller's advice, taking over then
+        a = f["advice"]
+        assert a["under"] == "the coordinated controller, taking over now", a
+        assert a["arrival_time_s"] is not None and a["arrival_time_s"]["p50"] > f["time_s"]
     assert "ESTIMATOR bag_rupture bag_3" in proc.stdout
     logged = [(kind, source) for _, _, kind, source, _ in read_table(out / "live.sqlite",
                                                                       "alarms")

@@ -403,14 +403,31 @@ class Ascent:
         if self.state.counters[1] & F_HELD:
             self.state.counters[1] &= ~(F_HELD | F_QUIET | F_STILL | F_HAVE_B)
 
-    def fork(self) -> Ascent:
+    def fork(self, mode: str | None = None) -> Ascent:
         """A copy that runs on from here on its own: its state, switches, controller state,
         record, faults and noise generators copied; the plant and the loop's records shared
-        (read only). For a forecast: the copy run to its end leaves this run where it is."""
+        (read only). For a forecast: the copy run to its end leaves this run where it is.
+
+        ``mode`` (another control mode): the copy's valves are run from here by that mode's
+        controllers, taking over now with fresh memory (their filters start from the
+        readings, a separation already past is noted at their first sample, the valves keep
+        their settings until it): "if this controller took over now"."""
         twin = copy.copy(self)
         for name in ("state", "switches", "control_state", "recorder"):
             value = getattr(self, name)
             setattr(twin, name, type(value)(*[_copied(a) for a in value]))
+        if mode is not None and mode != self.mode:
+            if mode not in MODES or mode in ("paper", COMMANDED) or self.external is not None:
+                raise ValueError(f"a fork takes over with the decentralized or coordinated "
+                                 f"controller on a table engine, not {mode!r}")
+            table, _, fill = fuzzy_maps(self.scenario, "table")
+            controllers, _ = controller_for(self.scenario, self.plant, mode, table, fill)
+            twin.controllers = loop_controllers(controllers, self.clusters)
+            twin.control_state = new_state(twin.controllers.bags.size)
+            twin.control_state.fill[:] = self.control_state.fill
+            twin.control_state.opening[:] = self.control_state.opening
+            twin.mode = mode
+            twin.end_held_block()
         twin.faults, twin.fault_events = list(self.faults), list(self.fault_events)
         twin.force_noise, twin.meas_noise = (copy.deepcopy(self.force_noise),
                                              copy.deepcopy(self.meas_noise))

@@ -41,15 +41,17 @@ def band(values) -> dict | None:
             "p95": round(float(q[2]), 3), "n": int(v.size)}
 
 
-def forecast(estimator) -> dict:
+def forecast(estimator, mode: str | None = None) -> dict:
     """The forecast at the estimator's time: ``time_s``; ``separation_time_s``,
     ``breakout_time_s``, ``arrival_time_s`` (the last bag's) and ``arrival_by_bag``, each a
     :func:`band` [s]; ``max_ascent_velocity_ms`` [m/s] and ``max_pitch_deg`` [deg] still to
     come, bands; ``p_unsafe`` (the share of the members whose lift ends unsafe from a breach
     still to come: the module docstring), ``unsafe_already`` (the share whose breach is past)
-    and ``members``."""
+    and ``members``; ``under``: what runs the valves from now. ``mode``: the forks' valves
+    run from now by that mode's controller (:meth:`flexlift.ascent.loop.Ascent.fork`), the
+    forecast under the controller's advice; default the members' own control."""
     ens, now = estimator.ensemble, estimator.t
-    forks = [run.fork() for run in ens.runs]
+    forks = [run.fork(mode) for run in ens.runs]
     advance_batch(forks, ended=list(ens.ended))
     results = []
     for run in forks:
@@ -59,10 +61,11 @@ def forecast(estimator) -> dict:
             results.append(error.partial)
     names = list(ens.plant.names)
     arrival = {name: [] for name in names}
-    mode = ens.runs[0].mode
+    own = ens.runs[0].mode
     out = {"time_s": round(now, 3), "members": len(results),
-           "under": "the commands as they stand, held" if mode == COMMANDED
-           else f"the {mode} controller"}
+           "under": (f"the {mode} controller, taking over now" if mode not in (None, own)
+                     else "the commands as they stand, held" if own == COMMANDED
+                     else f"the {own} controller")}
     sep, brk, last, vmax, pmax, unsafe, already = [], [], [], [], [], 0, 0
     for res in results:
         h = res.headline

@@ -23,6 +23,10 @@ from flexlift.estimate.filter import Estimator, window_steps
 from flexlift.estimate.forecast import forecast
 from flexlift.sensors.config import sensors_of
 
+#: the controller whose advice commanded members are forecast under too: the master's laws
+#: (flexlift.live.master runs the coordinated mode's)
+ADVICE_MODE = "coordinated"
+
 
 @dataclass(frozen=True)
 class Settings:
@@ -142,7 +146,10 @@ class Watch:
         self.alarms.extend(detector.tick(min(t, self.latest)))
         self.history.append((t, est.state()))
         if t >= self.next_forecast:
-            self.forecasts.append(forecast(est))
+            f = forecast(est)
+            if est.valves:  # commanded: also under the controller's advice, from now
+                f["advice"] = forecast(est, ADVICE_MODE)
+            self.forecasts.append(f)
             self.next_forecast += self.settings.forecast_every_s
         if self.progress is not None:
             self.progress(min(t / self.length, 1.0))

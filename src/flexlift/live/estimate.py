@@ -6,7 +6,8 @@ The session hands every reading it parsed to :meth:`LiveEstimate.put` (a bounded
 reading that finds it full is counted as ``dropped_queue_full``, never waited for), and, when the
 master controls the lift, every command it sent to :meth:`LiveEstimate.put_command`: the
 members are then *commanded* (their valves set as the master's commands set the lift's, at
-the commands' times), not run by a controller of their own that would drift from the
+the commands' times: the later of the command's stamp and the latest reading's time, since
+the lift's clock has passed that), not run by a controller of their own that would drift from the
 master's. Advising (``--control advise``), the valves are the operator's: the members run the
 scenario's controller. The thread takes them
 in the order they came, the Watch windows them by their own times (a reading later than its
@@ -31,7 +32,7 @@ from flexlift.sensors.log import Reading
 QUEUE_MAX = 200_000
 #: a command's travel from the master to its valve, at most [s of wall time] (the network
 #: and the threads on both sides); in the lift's time, times the lift's clock rate
-COMMAND_LATENCY_S = 0.05
+COMMAND_LATENCY_S = 0.1
 #: the longest wait for a reading before the thread looks at its stop flag [s of wall time]
 POLL_S = 0.1
 

@@ -67,10 +67,17 @@ def estimate_text(est: dict | None) -> str:
             f"{a['confidence']:.2f}): {a['message']}; {a['advice']}" for a in est["alarms"]]
     if not est["alarms"]:
         out.append("No fault detected.")
-    out += ["", "| forecast at [s] | breakout | last arrival | P(unsafe) still to come |",
-            "|---|---|---|---|"]
-    out += [f"| {f['time_s']:.0f} | {_band(f['breakout_time_s'])} | "
-            f"{_band(f['arrival_time_s'])} | {f['p_unsafe']:.2f} |" for f in est["forecasts"]]
+    out += ["", "Forecasts (5-95 %): under the commands as they stand, held; and under the "
+                "controller's advice (the coordinated laws taking over at the forecast's time).",
+            "", "| forecast at [s] | breakout | last arrival | P(unsafe) still to come | "
+                "advice: breakout | advice: last arrival | advice: P(unsafe) |",
+            "|---|---|---|---|---|---|---|"]
+    for f in est["forecasts"]:
+        a = f.get("advice")
+        out.append(f"| {f['time_s']:.0f} | {_band(f['breakout_time_s'])} | "
+                   f"{_band(f['arrival_time_s'])} | {f['p_unsafe']:.2f} | "
+                   + (f"{_band(a['breakout_time_s'])} | {_band(a['arrival_time_s'])} | "
+                      f"{a['p_unsafe']:.2f} |" if a else "- | - | - |"))
     c = est["filter"]
     out += ["", f"Estimated to {est['estimated_to_s']} s, {est['behind_s']} s behind the latest "
                 f"reading; readings assimilated {c['assimilated']}, gated {c['gated']}, late "

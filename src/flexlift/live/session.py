@@ -116,8 +116,8 @@ class Live:
             self.link.publish(command_topic(self.lift, bag, valve),
                               command_payload(self.seq, t, value), qos=QOS_COMMAND)
         self.log.command(time.time(), command, sent)
-        if sent and self.estimate is not None:
-            self.estimate.put_command(t, bag, valve, value)
+        if sent and self.estimate is not None:  # the lift's clock is at least its latest reading's
+            self.estimate.put_command(max(t, self.board.t_max), bag, valve, value)
         self.commands += 1
         self.alarms.command_changed(bag, "fill_flow" if valve == "fill" else "purge")
 
