@@ -199,3 +199,19 @@ def test_the_cache_never_writes_through_a_planted_link(tmp_path):
     with pytest.raises(OSError):
         cache.put("k", {"a": 1})
     assert target.read_text() == "mine\n"
+
+
+def test_a_pipeline_is_searched_up_to_its_single_failures_not_the_hulls_study(capsys):
+    """The salvage study is for a hull: a pipeline's search stops at its single failures
+    by default (said, and P(unsafe) named as not assessed); asked for, it is refused."""
+    from flexlift import load_scenario
+    from flexlift.cli.design import _up_to
+    from flexlift.errors import InputError
+
+    pipe, tanker = load_scenario("pipeline"), load_scenario("tanker")
+    assert _up_to(None, tanker, quiet=False) == "salvage"
+    assert _up_to(None, pipe, quiet=False) == "contingency"
+    assert "P(unsafe) is not assessed" in capsys.readouterr().err
+    assert _up_to("nominal", pipe, quiet=True) == "nominal"
+    with pytest.raises(InputError, match="--up-to.*salvage study is for a hull"):
+        _up_to("salvage", pipe, quiet=True)

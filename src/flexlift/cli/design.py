@@ -85,8 +85,10 @@ def add_parser(sub) -> None:
     p.add_argument("--budget", type=int, default=60, help="candidates to try (default 60)")
     p.add_argument("--population", type=int, default=12, help="candidates per generation")
     p.add_argument("--seed", type=int, default=0, help="the search's seed (default 0)")
-    p.add_argument("--up-to", default="salvage",
-                   help="the last rung: statics, nominal, contingency or salvage (default)")
+    p.add_argument("--up-to", default=None,
+                   help="the last rung: statics, nominal, contingency or salvage (default: "
+                        "salvage for a hull; contingency for a pipeline, which the salvage "
+                        "study is not for)")
     p.add_argument("--samples", type=int, default=600,
                    help="the salvage study's most cases (default 600; it stops once decided)")
     p.add_argument("--no-compare", action="store_true",
@@ -104,6 +106,22 @@ def add_parser(sub) -> None:
     p.set_defaults(func=_main)
 
 
+def _up_to(given: str | None, scenario, quiet: bool) -> str:
+    """The last rung: as given; by default the salvage study for a hull and the single
+    failures for a pipeline (said); the salvage study asked of a pipeline is refused."""
+    pipe = scenario.pipe is not None
+    if given == "salvage" and pipe:
+        raise InputError("--up-to", given, "the salvage study is for a hull: a pipeline's "
+                         "search goes up to contingency (its single failures)")
+    if given is not None:
+        return given
+    if pipe and not quiet:
+        sys.stderr.write("flexlift design: a pipeline: the search goes up to its single "
+                         "failures; P(unsafe) is not assessed (the salvage study is for a "
+                         "hull)\n")
+    return "contingency" if pipe else "salvage"
+
+
 def _main(args: argparse.Namespace) -> int:
     from flexlift.design.run import run_design
     from flexlift.design.search import Options, check_options
@@ -119,7 +137,8 @@ def _main(args: argparse.Namespace) -> int:
                        internal=args.internal, per_point=args.per_point_types,
                        supplies=args.supply)
     options = Options(budget=args.budget, population=args.population, seed=args.seed,
-                      target=args.target, objectives=tuple(args.objectives), up_to=args.up_to,
+                      target=args.target, objectives=tuple(args.objectives),
+                      up_to=_up_to(args.up_to, scenario, args.quiet or args.json),
                       samples=args.samples)
     check_options(options, space)
     out = args.out if args.out is not None else Path("flexlift-out") / f"design-{scenario.name}"

@@ -122,7 +122,8 @@ def _decision(summary: dict) -> str:
             f"{len(b['points'])} lift points ({html.escape(b['mode'])} control, {b['ascent_speed_m_s']:g} m/s): "
             f"the least found that passed every check up to the {RUNG_TEXT[b['reached']]}; "
             f"{b['bags'] / lb['n_minus_1']:.2f} x the N-1 lower bound of {lb['n_minus_1']} "
-            "bags.</p>")
+            "bags.</p>" + (f"<p><b>Not assessed:</b> {html.escape(summary['not_assessed'])}."
+                           "</p>" if summary.get("not_assessed") else ""))
 
 
 def _side_by_side(summary: dict) -> str:

@@ -114,6 +114,10 @@ def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
                         "reached": reached, "calls": found["calls"],
                         "cache_hits": found["cache_hits"]},
         "no_plan": None if best else report.no_plan(rows, space),
+        "not_assessed": (None if options.up_to == "salvage" else
+                         f"the search stopped at the {options.up_to} rung: what comes after it "
+                         "(" + ", ".join(RUNGS[RUNGS.index(options.up_to) + 1:]) + ") was not "
+                         "checked; P(unsafe) not assessed"),
         "own_plan": own, "options": {k: (list(v) if isinstance(v, tuple) else v)
                                      for k, v in vars(options).items()},
         "space": {"models": list(space.models), "points": list(space.points),
