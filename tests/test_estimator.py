@@ -258,3 +258,29 @@ def test_resampling_keeps_the_unknowns_spread_and_parts_the_copies(tanker):
     assert abs(H.mean() - mean) < 2 * sd
     assert 0.3 * sd < H.std(ddof=1) < 3 * sd
     assert not ens.resample(np.zeros(8), np.random.default_rng(0))  # all alike: kept
+
+
+def test_the_same_seed_resamples_alike_whatever_numpys_global_generator(tanker):
+    """filterpy draws its systematic offset from numpy's global generator: the members are
+    resampled alike from the same seed whatever that generator's state, and it is given
+    back as it was (the same seed gave other replays before)."""
+    weights = np.array([0.05, 0.4, 0.05, 0.3, 0.05, 0.05, 0.05, 0.05])
+    # with these weights the offset decides: which members are drawn differs across offsets
+    from flexlift.estimate.ensemble import _systematic
+
+    picks = []
+    for global_seed in (1, 2, 3):
+        np.random.seed(global_seed)
+        before = np.random.get_state()[1].copy()
+        picks.append(tuple(_systematic(weights, np.random.default_rng(7))))
+        assert np.array_equal(np.random.get_state()[1], before)  # given back
+    assert picks[0] == picks[1] == picks[2]
+    offsets = {tuple(_systematic(weights, np.random.default_rng(s))) for s in range(20)}
+    assert len(offsets) > 1  # the offset is drawn, not fixed
+    runs = []
+    for global_seed in (11, 12):
+        np.random.seed(global_seed)
+        ens = Ensemble(tanker, 8, seed=5, control="decentralized")
+        ens.resample(np.log(weights), np.random.default_rng(0), force=True)
+        runs.append(np.array([run.state.H[0] for run in ens.runs]))
+    assert np.array_equal(runs[0], runs[1])

@@ -168,7 +168,7 @@ class Ensemble:
         kernels = {"weight": _kernel(self.weight, w), "H": _kernel(H, w), "n": _kernel(n, w)}
         # (filterpy walks its cumulative sum past the end when rounding leaves it just
         # below 1: the weights are given a sum a hair above 1)
-        chosen = systematic_resample(w * (1.0 + 1e-12))
+        chosen = _systematic(w * (1.0 + 1e-12), rng)
         seen: set[int] = set()
         runs, weight, ended = [], np.empty(self.m), []
         for slot, j in enumerate(chosen):
@@ -220,3 +220,16 @@ def _kernel(values: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     mean = np.tensordot(w, values, axes=1)
     var = np.tensordot(w, (values - mean) ** 2, axes=1)
     return mean, np.sqrt(var)
+
+
+def _systematic(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """filterpy's ``systematic_resample`` of ``weights``, its one random offset drawn from
+    ``rng``: filterpy draws it from numpy's global generator, which nobody seeds, so the same
+    seed gave other replays (the pull's members parted by 1,500 s). The global generator's
+    state is set from ``rng`` for the call and given back as it was after it."""
+    saved = np.random.get_state()
+    np.random.seed(int(rng.integers(2**32)))
+    try:
+        return systematic_resample(weights)
+    finally:
+        np.random.set_state(saved)

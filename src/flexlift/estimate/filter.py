@@ -39,6 +39,9 @@ GATE = 6.0
 #: a member whose motion readings are off by this many standard deviations (root mean
 #: square) has lost the lift: the members are resampled whatever their effective number
 OUTLIER = 3.0
+#: the window's predictions are not to be judged by (:attr:`Estimator.lost`) when more than
+#: this share of the members have lost the lift (:data:`OUTLIER`), or the ensemble was widened
+LOST_SHARE = 0.5
 #: the most a lost ensemble's motion spread is widened by at one update [-]
 WIDEN_MAX = 2.0
 #: commanded members: each member's fill is the command times (1 + e), e ~ N(0, this) drawn
@@ -76,6 +79,7 @@ class Counts:
     updates: int = 0
     resampled: int = 0
     widened: int = 0
+    lost_windows: int = 0
     rejected: int = 0
     by_sensor_gated: dict = field(default_factory=dict)
 
@@ -109,6 +113,9 @@ class Estimator:
         self.counts = Counts()
         self.rng = np.random.default_rng(seed + 1)
         self.t = 0.0  # the time the members stand at [s]
+        #: the last window's members had lost the lift (most of them off the motion readings,
+        #: or widened): its predictions are not a fault detector's yardstick
+        self.lost = False
         self._row = self._row_before = 0  # the first recorded row not yet read
 
     def assimilate(self, t_end: float, readings) -> list[Prediction]:
@@ -131,9 +138,11 @@ class Estimator:
         floor = np.array([NOISE_FLOOR.get(q, 0.0) for q in quantity])
         sigma = np.maximum(noise, floor)
         motion = observed & np.array([q != "sling_force" for q in quantity])
+        self.lost = False
         if motion.any():  # the members whose motion explains the readings, then the update
             r = (z[motion, None] - Y[motion]) / sigma[motion, None]
             worst = np.mean(r**2, axis=0) > OUTLIER**2
+            self.lost = bool(worst.mean() > LOST_SHARE)
             if self.ensemble.resample(-0.5 * np.minimum(r**2, GATE**2).sum(axis=0),
                                       self.rng, force=bool(worst.any() and not worst.all())):
                 self.counts.resampled += 1
@@ -142,6 +151,8 @@ class Estimator:
         if np.sum(motion & ~used) > 0.5 * np.sum(motion):  # every member has lost the lift
             Y = self._widen(Y, z, sigma, motion)
             used = observed
+            self.lost = True
+        self.counts.lost_windows += self.lost
         self._count(readings, observed, used)
         if used.any():
             self._update(readings, quantity, Y, z, sigma, used)

@@ -138,7 +138,7 @@ class Watch:
         t, est, detector = self.t_end, self.est, self.detector
         self._commanded(t)
         for p in est.assimilate(t, self.buffer):
-            if p.sensor in self.valve_sensors:
+            if p.sensor in self.valve_sensors or est.lost:
                 self.alarms.extend(detector.update(_reading(p), None, None))
             else:
                 self.alarms.extend(detector.update(_reading(p), p.mean, p.std))
