@@ -270,16 +270,16 @@ def test_the_same_seed_resamples_alike_whatever_numpys_global_generator(tanker):
 
     picks = []
     for global_seed in (1, 2, 3):
-        np.random.seed(global_seed)
-        before = np.random.get_state()[1].copy()
+        np.random.seed(global_seed)  # noqa: NPY002 - the global one is the point
+        before = np.random.get_state()[1].copy()  # noqa: NPY002
         picks.append(tuple(_systematic(weights, np.random.default_rng(7))))
-        assert np.array_equal(np.random.get_state()[1], before)  # given back
+        assert np.array_equal(np.random.get_state()[1], before)  # noqa: NPY002 - given back
     assert picks[0] == picks[1] == picks[2]
     offsets = {tuple(_systematic(weights, np.random.default_rng(s))) for s in range(20)}
     assert len(offsets) > 1  # the offset is drawn, not fixed
     runs = []
     for global_seed in (11, 12):
-        np.random.seed(global_seed)
+        np.random.seed(global_seed)  # noqa: NPY002 - the global one is the point
         ens = Ensemble(tanker, 8, seed=5, control="decentralized")
         ens.resample(np.log(weights), np.random.default_rng(0), force=True)
         runs.append(np.array([run.state.H[0] for run in ens.runs]))

@@ -227,9 +227,9 @@ def _systematic(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     ``rng``: filterpy draws it from numpy's global generator, which nobody seeds, so the same
     seed gave other replays (the pull's members parted by 1,500 s). The global generator's
     state is set from ``rng`` for the call and given back as it was after it."""
-    saved = np.random.get_state()
-    np.random.seed(int(rng.integers(2**32)))
+    saved = np.random.get_state()  # noqa: NPY002 - filterpy reads the global one
+    np.random.seed(int(rng.integers(2**32)))  # noqa: NPY002
     try:
         return systematic_resample(weights)
     finally:
-        np.random.set_state(saved)
+        np.random.set_state(saved)  # noqa: NPY002
