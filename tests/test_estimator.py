@@ -244,19 +244,27 @@ def test_the_forecast_under_the_controllers_advice_takes_over_from_now(tanker):
 
 
 def test_resampling_keeps_the_unknowns_spread_and_parts_the_copies(tanker):
-    """Half the members unlikely: the other half drawn twice each, forks; the hold then
-    drawn from Liu and West's kernel: the weighted mean kept, no two members alike, the
-    spread about the weighted spread."""
+    """Half the members unlikely: the other half drawn twice each, forks; each bag's gas
+    then drawn from Liu and West's kernel: the weighted mean kept, no two members alike, the
+    spread about the weighted spread. No member has separated, so no reading has seen the
+    hold: each slot keeps its own."""
     ens = Ensemble(tanker, 8, seed=5, control="decentralized")
     log_w = np.where(np.arange(8) % 2 == 0, 0.0, -50.0)
     w = np.exp(log_w - log_w.max())
-    mean, sd = _kernel(np.array([run.state.H[0] for run in ens.runs]), w / w.sum())
+    n0 = np.array([run.state.n[0] for run in ens.runs])
+    mean, sd = _kernel(n0, w / w.sum())
+    H0 = np.array([run.state.H[0] for run in ens.runs])
     assert ens.resample(log_w, np.random.default_rng(0), force=True)  # (ESS = m / 2)
-    H = np.array([run.state.H[0] for run in ens.runs])
-    assert len(set(np.round(H, 6))) == 8
+    n = np.array([run.state.n[0] for run in ens.runs])
+    assert len(set(np.round(n, 9))) == 8
     assert len({id(run) for run in ens.runs}) == 8 and len({id(run.state) for run in ens.runs}) == 8
-    assert abs(H.mean() - mean) < 2 * sd
-    assert 0.3 * sd < H.std(ddof=1) < 3 * sd
+    assert abs(n.mean() - mean) < 2 * sd
+    assert 0.3 * sd < n.std(ddof=1) < 3 * sd
+    assert np.array_equal([run.state.H[0] for run in ens.runs], H0)  # the hold by slot
+    ens.runs[0].state.sep[:] = True  # one member separated: the readings now tell of the hold
+    assert ens.resample(log_w, np.random.default_rng(1), force=True)
+    held = [run.state.H[0] for run in ens.runs if not run.state.sep.any()]
+    assert held and not np.isin(held, H0).any()  # drawn from the kernel, not kept
     assert not ens.resample(np.zeros(8), np.random.default_rng(0))  # all alike: kept
 
 

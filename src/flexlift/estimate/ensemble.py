@@ -156,7 +156,10 @@ class Ensemble:
         ``sqrt(1 - a^2)`` times the weighted standard deviation, ``a = (3 d - 1) / (2 d)``
         for the ``discount`` d: their mean and spread are kept, so resampling does not
         collapse them; each bag's gas likewise (the copies part, and the load cells' update
-        has a spread to work on). Returns whether it resampled."""
+        has a spread to work on). Until a member has separated no reading has seen the hold:
+        the weights say nothing of it, so each slot keeps the hold it had (a draw from the
+        parents would only thin the prior's spread by chance). Returns whether it
+        resampled."""
         w = np.exp(log_weights - log_weights.max())
         w /= w.sum()
         if 1.0 / np.sum(w**2) >= self.m / 2 and not force:
@@ -166,6 +169,9 @@ class Ensemble:
         H = np.array([run.state.H for run in self.runs])  # (m, ng)
         n = np.array([run.state.n for run in self.runs])  # (m, nb)
         kernels = {"weight": _kernel(self.weight, w), "H": _kernel(H, w), "n": _kernel(n, w)}
+        # the readings tell of the hold only once a member has separated (its motion, or
+        # its not moving when the lift does)
+        informed = any(bool(run.state.sep.any()) for run in self.runs)
         # (filterpy walks its cumulative sum past the end when rounding leaves it just
         # below 1: the weights are given a sum a hair above 1)
         chosen = _systematic(w * (1.0 + 1e-12), rng)
@@ -182,8 +188,11 @@ class Ensemble:
                                + spread * sd * rng.standard_normal(), 0.05)
             mean, sd = kernels["H"]
             held = ~run.state.sep
-            draw = (shrink * H[j] + (1.0 - shrink) * mean
-                    + spread * sd * rng.standard_normal(H.shape[1]))
+            if informed:
+                draw = (shrink * H[j] + (1.0 - shrink) * mean
+                        + spread * sd * rng.standard_normal(H.shape[1]))
+            else:  # no member has separated: no reading has seen the hold: the slot keeps its
+                draw = H[slot]
             run.state.H[held] = np.maximum(draw[held], 0.0)
             mean, sd = kernels["n"]
             run.state.n[:] = np.maximum(shrink * n[j] + (1.0 - shrink) * mean
