@@ -56,6 +56,8 @@ GOAL_DELAY_S = {"bag_rupture": 30.0, "sling_break": 30.0}
 GOAL_DELAY_OTHER_S = 120.0
 #: a faulted lift is replayed this long past its fault [s]
 FOLLOW_S = 300.0
+#: the 73-bag plan's members (its replay is about ten times the tanker's work per member)
+BAGS73_MEMBERS = 8
 #: forecasts at these fractions of the ascent (separation to the last arrival)
 AT = (0.25, 0.50, 0.75)
 
@@ -84,9 +86,11 @@ def phases(case: str) -> dict:
 
 
 def lifts(cases: list[str], times: dict) -> list[dict]:
-    """The benchmark's lifts: (case, fault or None, seed)."""
-    out, seed = [], 100
+    """The benchmark's lifts: (case, fault or None, seed), the cases taken in turn (a run
+    stopped at its limit has some of each)."""
+    per, seed = {}, 100
     for case in cases:
+        out = per.setdefault(case, [])
         names = list(prepare(scenario_of(case, 0)).plant.names)
         kinds = list(KINDS) if case == "tanker" else ["bag_rupture", "sling_break",
                                                       "sensor_drift"]
@@ -100,10 +104,13 @@ def lifts(cases: list[str], times: dict) -> list[dict]:
                 out.append({"case": case, "seed": seed, "phase": phase, "fault": {
                     "kind": kind, "bag": bag, "time_s": float(times[case][phase]),
                     **KINDS[kind]}})
-        for _ in range(4 if case == "tanker" else 3):
-            seed += 1
-            out.append({"case": case, "seed": seed, "phase": None, "fault": None})
-    return out
+        for j in range(4 if case == "tanker" else 3):
+            seed += 1  # the fault-free lifts spread through the list
+            out.insert(j * (len(out) // 3 + 1), {"case": case, "seed": seed, "phase": None,
+                                                  "fault": None})
+    turns = [per[c] for c in cases]
+    return [lift for k in range(max(map(len, turns))) for t in turns if k < len(t)
+            for lift in [t[k]]]
 
 
 def one_lift(lift: dict, times: dict, members: int, folder: Path) -> dict:
@@ -218,7 +225,10 @@ def main(argv=None) -> dict:
             if time.perf_counter() - start > args.limit:
                 result["stopped"] = f"the {args.limit:g} s limit: {len(result['rows'])} done"
                 break
-            row = one_lift(lift, times, args.members, Path(tmp))
+            members = min(args.members, BAGS73_MEMBERS) if lift["case"] == "bags73" \
+                else args.members
+            row = one_lift(lift, times, members, Path(tmp))
+            row["members"] = members
             result["rows"].append(row)
             result["summary"] = summarise(result["rows"])
             Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
