@@ -63,3 +63,22 @@ def test_live_estimate_names_a_rupture_within_30_s_and_nothing_before(tmp_path):
     assert logged == [("estimator:bag_rupture", "bag_3")]
     report = (out / "report.md").read_text()
     assert "What the estimator made of the readings" in report and "bag_rupture" in report
+
+
+def test_live_with_no_reading_ends_saying_so_not_at_minus_infinity(tmp_path, capsys):
+    """A broker nobody runs and a 2 s wall limit: live ends ``no_readings``, saying it ended
+    before any reading came (not ``t = -inf s``), exit 1 (not arrived)."""
+    import socket
+
+    from flexlift.cli import main
+
+    with socket.socket() as s:  # a free loopback port, closed again: nobody listens there
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    code = main(["live", "tanker", "--broker", f"mqtt://127.0.0.1:{port}", "--out",
+                 str(tmp_path / "out"), "--wall-limit", "2", "--no-plan", "--no-dashboard"])
+    out = capsys.readouterr().out
+    assert code == 1
+    assert "ended: no_readings before any reading came" in out and "-inf" not in out
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert report["lift"]["ended"] == "no_readings" and report["lift"]["end_time_s"] is None

@@ -126,8 +126,9 @@ def _main(args: argparse.Namespace) -> int:
             board.stop()
         if embedded is not None:
             embedded.stop()
-    _say(f"ended: {outcome.reason} at t = {outcome.t_end:.1f} s; "
-         f"report in {args.out}/report.md")
+    when = (f"at t = {outcome.t_end:.1f} s" if math.isfinite(outcome.t_end)
+            else "before any reading came")
+    _say(f"ended: {outcome.reason} {when}; report in {args.out}/report.md")
     return 1 if until == "arrived" and outcome.reason != "arrived" and \
         outcome.reason != "interrupted" else 0
 
