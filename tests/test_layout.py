@@ -27,7 +27,8 @@ ALLOWED = {
     # (a replay's folder: output/replay.py reads the estimate's record of what it gives)
     "output": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                "ascent", "sensors", "estimate"},
-    "live": {"scenario", "physics", "control", "ascent", "sensors", "output"},  # rig and live
+    # rig and live; live --estimate runs the estimator (estimate/, a layer below)
+    "live": {"scenario", "physics", "control", "ascent", "sensors", "estimate", "output"},
     "stages": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
                "ascent", "output", "sensors"},
     "sweep": {"scenario", "structure", "loads", "dynamics", "fuzzy", "physics", "control",
