@@ -215,3 +215,16 @@ def test_a_pipeline_is_searched_up_to_its_single_failures_not_the_hulls_study(ca
     assert _up_to("nominal", pipe, quiet=True) == "nominal"
     with pytest.raises(InputError, match="--up-to.*salvage study is for a hull"):
         _up_to("salvage", pipe, quiet=True)
+
+
+def test_a_pipelines_candidates_are_scenarios_and_its_points_reach_its_own(tmp_path, capsys):
+    """The pipeline's candidates place their bags by lift.bags (its pipe.lift_points set
+    aside: before, every candidate was refused as placing them twice), and the points may
+    go up to twice its own 40 (a 1 km line needs short spans): a plan passes the statics."""
+    code = main(["design", "pipeline", "--up-to", "statics", "--budget", "12", "--out",
+                 str(tmp_path / "o"), "--json", "--no-compare"])
+    s = json.loads(capsys.readouterr().out)
+    assert s["space"]["points"] == [1, 80]
+    assert code == 0 and s["found"], s["no_plan"]
+    rows = (tmp_path / "o" / "candidates.csv").read_text()
+    assert "place the bags; give one" not in rows

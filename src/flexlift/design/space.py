@@ -122,8 +122,9 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
                per_point=False, supplies=None) -> Space:
     """The search space of ``scenario``: each part as given (a sequence of allowed values, a
     ``(low, high)`` range for ``points``, ``over`` and ``internal``), else its default
-    (every catalogue bag that is not kept as published, 1..12 points, 0..12 bags over the
-    fewest, 0..the most internal bags the tanks hold of the smallest bag offered, the
+    (every catalogue bag that is not kept as published, 1..12 points (or up to twice the
+    user's own plan's lift points, when more: a long line needs its spans short), 0..12 bags
+    over the fewest, 0..the most internal bags the tanks hold of the smallest bag offered, the
     scenario's mode, speed, pull and supply, the catalogue's dump valve); ``per_point``: one
     catalogue bag per lift point. An empty or contradictory part is an InputError (one
     line)."""
@@ -140,7 +141,8 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
     c = scenario.control
     if count is not None and not 1 <= int(count):
         raise InputError("--count", count, "a whole number of bags per point, at least 1")
-    space = Space(models=models, points=_pair(points, (1, 12), "--points"),
+    own = len(scenario.lift.bags or [])  # the user's own plan's lift points
+    space = Space(models=models, points=_pair(points, (1, max(12, 2 * own)), "--points"),
                   over=_pair(over, (0, 12), "--over", low=0),
                   count=None if count is None else int(count),
                   modes=tuple(modes or (c.mode,)), ascent_speeds=tuple(speeds or
@@ -266,4 +268,6 @@ def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dic
            "control.breakout_pull_t": candidate.breakout_pull_t}
     if candidate.supply_free_air_m3_min is not None:
         out["gas.supply_free_air_m3_min"] = candidate.supply_free_air_m3_min
+    if scenario.pipe is not None and scenario.pipe.lift_points is not None:
+        out["pipe.lift_points"] = None  # the candidate's lift.bags place the bags, not the pipe's
     return out
