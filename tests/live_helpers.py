@@ -151,3 +151,16 @@ def mosquitto(tmp_path):
         yield broker
     finally:
         broker.stop()
+
+
+#: the live tests' sensors (appended to the built-in tanker's scenario)
+SENSORS = """
+sensors:
+  seed: 3
+  depth: {rate_Hz: 1.0, noise_m: 0.02, latency_s: 0.2}
+  pitch: {at: [hull]}
+  sling_force: {rate_Hz: 1.0, latency_s: 0.1, dropout: 0.02}
+  fill_flow: null
+  purge: {at: [bag_1, bag_2, bag_3, bag_4], rate_Hz: 1.0}
+  supply_pressure: null
+"""

@@ -14,20 +14,10 @@ from importlib.resources import files
 
 import paho.mqtt.client as mqtt
 import pytest
-from live_helpers import mosquitto, wait_until  # noqa: F401 - the fixture
+from live_helpers import SENSORS, mosquitto, wait_until  # noqa: F401 - the fixture
 
 #: the rig's speed in the tests (times real time)
 SPEED = 100.0
-SENSORS = """
-sensors:
-  seed: 3
-  depth: {rate_Hz: 1.0, noise_m: 0.02, latency_s: 0.2}
-  pitch: {at: [hull]}
-  sling_force: {rate_Hz: 1.0, latency_s: 0.1, dropout: 0.02}
-  fill_flow: null
-  purge: {at: [bag_1, bag_2, bag_3, bag_4], rate_Hz: 1.0}
-  supply_pressure: null
-"""
 HOSTILE = [
     ("flexlift/tk/sensor/bag_1/depth", b"not json", "not_json"),
     ("flexlift/tk/sensor/bag_1/depth", b'{"time": 1, "value": NaN}', "not_finite"),

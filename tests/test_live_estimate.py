@@ -9,21 +9,13 @@ import sys
 from importlib.resources import files
 
 import pytest
+from live_helpers import SENSORS
 
 from flexlift.live.log import read_table
 
 pytest.importorskip("flexlift.sensors.tap")
 
-SENSORS = """
-sensors:
-  seed: 3
-  depth: {rate_Hz: 1.0, noise_m: 0.02, latency_s: 0.2}
-  pitch: {at: [hull]}
-  sling_force: {rate_Hz: 1.0, latency_s: 0.1, dropout: 0.02}
-  fill_flow: null
-  purge: {at: [bag_1, bag_2, bag_3, bag_4], rate_Hz: 1.0}
-  supply_pressure: null
-faults:
+FAULT = """faults:
   - {kind: bag_rupture, bag: bag_3, time_s: 200.0}
 """
 RUPTURE_S = 200.0
@@ -34,7 +26,7 @@ def test_live_estimate_names_a_rupture_within_30_s_and_nothing_before(tmp_path):
     the master filling): the estimator's one alarm is that rupture, at that bag, within the
     issue's 30 s; it is said, in the log's alarms and in the report, with the forecasts."""
     path = tmp_path / "tanker-live.yaml"
-    path.write_text((files("flexlift.scenarios") / "tanker.yaml").read_text() + SENSORS)
+    path.write_text((files("flexlift.scenarios") / "tanker.yaml").read_text() + SENSORS + FAULT)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
     out = tmp_path / "out"
     proc = subprocess.run(
