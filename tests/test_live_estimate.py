@@ -74,3 +74,14 @@ def test_live_with_no_reading_ends_saying_so_not_at_minus_infinity(tmp_path, cap
     assert "ended: no_readings before any reading came" in out and "-inf" not in out
     report = json.loads((tmp_path / "out" / "report.json").read_text())
     assert report["lift"]["ended"] == "no_readings" and report["lift"]["end_time_s"] is None
+
+
+def test_live_estimate_with_one_member_is_refused_before_writing(tmp_path, capsys):
+    """``--estimate --members 1``: one line naming --members, exit 2, no folder."""
+    from flexlift.cli import main
+
+    code = main(["live", "tanker", "--out", str(tmp_path / "out"), "--estimate",
+                 "--members", "1", "--no-dashboard"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--members" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()

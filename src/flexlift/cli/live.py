@@ -102,6 +102,8 @@ def _main(args: argparse.Namespace) -> int:
     from flexlift.live.run import live_folder
 
     until = _until(args.until)
+    if args.estimate:  # before anything is written: --members 1 is refused here
+        _settings(args).check()
     address = parse_broker(args.broker) if args.broker else None
     args.account = account_from(args, address)
     if args.account["username"] is not None and (address is None or args.rig):
@@ -208,16 +210,20 @@ def _estimator(args, scenario, master):
     """The estimator started on the master's plant (``--estimate``), else None."""
     if not args.estimate:
         return None
-    from flexlift.estimate.watch import Settings
     from flexlift.live.estimate import LiveEstimate
 
-    settings = Settings(members=args.members, forecast_every_s=args.forecast_every)
-    settings.check()
+    settings = _settings(args)
     est = LiveEstimate(scenario, settings, plant=master.plant,
                        commanded=args.control == "master",
                        rate=args.speed if args.rig else 1.0).start()
     _say(f"estimator: {args.members} members, a forecast every {args.forecast_every:g} s")
     return est
+
+
+def _settings(args):
+    from flexlift.estimate.watch import Settings
+
+    return Settings(members=args.members, forecast_every_s=args.forecast_every)
 
 
 def _say_estimate(s: dict) -> None:
