@@ -246,26 +246,77 @@ def test_the_forecast_under_the_controllers_advice_takes_over_from_now(tanker):
 def test_resampling_keeps_the_unknowns_spread_and_parts_the_copies(tanker):
     """Half the members unlikely: the other half drawn twice each, forks; each bag's gas
     then drawn from Liu and West's kernel: the weighted mean kept, no two members alike, the
-    spread about the weighted spread. No member has separated, so no reading has seen the
-    hold: each slot keeps its own."""
+    spread about the weighted spread. The hold of a held member is drawn afresh from its
+    prior truncated at its uplift (test_a_held_hold_is_drawn_from_the_prior_truncated_at_the_
+    uplift), its decay so far kept: the parents' holds are not copied."""
     ens = Ensemble(tanker, 8, seed=5, control="decentralized")
+    ens.advance(3001)  # 300 s of the pull: some decay
     log_w = np.where(np.arange(8) % 2 == 0, 0.0, -50.0)
     w = np.exp(log_w - log_w.max())
     n0 = np.array([run.state.n[0] for run in ens.runs])
     mean, sd = _kernel(n0, w / w.sum())
     H0 = np.array([run.state.H[0] for run in ens.runs])
+    decay = ens.hold_start[:, 0] - H0
+    assert np.all(decay > 0)  # each its own: the rate is its own uplift's (timer law)
     assert ens.resample(log_w, np.random.default_rng(0), force=True)  # (ESS = m / 2)
     n = np.array([run.state.n[0] for run in ens.runs])
     assert len(set(np.round(n, 9))) == 8
     assert len({id(run) for run in ens.runs}) == 8 and len({id(run.state) for run in ens.runs}) == 8
     assert abs(n.mean() - mean) < 2 * sd
     assert 0.3 * sd < n.std(ddof=1) < 3 * sd
-    assert np.array_equal([run.state.H[0] for run in ens.runs], H0)  # the hold by slot
-    ens.runs[0].state.sep[:] = True  # one member separated: the readings now tell of the hold
-    assert ens.resample(log_w, np.random.default_rng(1), force=True)
-    held = [run.state.H[0] for run in ens.runs if not run.state.sep.any()]
-    assert held and not np.isin(held, H0).any()  # drawn from the kernel, not kept
+    H = np.array([run.state.H[0] for run in ens.runs])
+    assert not np.isin(H, H0).any() and len(set(H)) == 8  # drawn afresh, not copied
+    assert set(np.round(ens.hold_start[:, 0] - H, 3)) <= set(np.round(decay, 3))  # kept
     assert not ens.resample(np.zeros(8), np.random.default_rng(0))  # all alike: kept
+
+
+def test_a_held_hold_is_drawn_from_the_prior_truncated_at_the_uplift(tanker):
+    """All a held lift's readings say of its hold is that it is above its uplift: a held
+    member's hold is drawn from the prior (mean H_0 less the decay so far, spread 25 % of
+    H_0) truncated there: 4,000 draws have that truncated normal's mean and spread within
+    their sampling error, and none is below the uplift; with no prior mass above the uplift
+    the hold is the uplift."""
+    from scipy.stats import truncnorm
+
+    from flexlift.estimate.ensemble import _uplift
+
+    ens = Ensemble(tanker, 2, seed=1, control="decentralized")
+    ens.advance(3001)
+    run, H0 = ens.runs[0], float(ens.plant.seabed.H0[0])
+    decay = float(ens.hold_start[0, 0] - run.state.H[0])
+    mean, sd = H0 - decay, 0.25 * H0
+    rng = np.random.default_rng(3)
+    for low in (mean - 0.5 * sd, mean + 1.5 * sd):  # the uplift below and above the mean
+        run.records.seabed.group_weight[0] -= low - _uplift(run, 0)  # the uplift set to low
+        assert _uplift(run, 0) == pytest.approx(low, rel=1e-9)
+        holds, starts = np.empty(4000), np.empty(4000)
+        for k in range(4000):
+            starts[k] = ens.held_draw(run, np.array([decay]), rng)[0]
+            holds[k] = run.state.H[0]
+        assert np.allclose(starts - holds, decay, rtol=1e-9)  # the decay kept
+        a = (low - mean) / sd
+        m_t, s_t = truncnorm.stats(a, np.inf, loc=mean, scale=sd, moments="mv")
+        assert holds.min() >= low
+        assert abs(holds.mean() - m_t) < 4 * np.sqrt(s_t / 4000)
+        assert abs(holds.std() - np.sqrt(s_t)) < 0.05 * np.sqrt(s_t)
+    run.records.seabed.group_weight[0] -= mean + 9 * sd - _uplift(run, 0)
+    start = ens.held_draw(run, np.array([decay]), rng)
+    assert run.state.H[0] == pytest.approx(mean + 9 * sd, rel=1e-12)
+    assert start[0] - run.state.H[0] == pytest.approx(decay, rel=1e-9)
+
+
+def test_released_members_separate_at_their_next_step(tanker):
+    """The lift separated before every member: each held member's hold is set just below its
+    uplift, and it separates at its next step; its decay so far is kept."""
+    ens = Ensemble(tanker, 3, seed=2, control="decentralized")
+    ens.advance(3001)
+    assert not any(run.state.sep.any() for run in ens.runs)
+    decay = ens.hold_start[:, 0] - np.array([run.state.H[0] for run in ens.runs])
+    ens.release()
+    ens.advance(3002)
+    assert all(run.state.sep.all() for run in ens.runs)
+    assert np.allclose(ens.hold_start[:, 0] - [run.state.H_old[0] for run in ens.runs],
+                       decay, rtol=1e-6)
 
 
 def test_the_same_seed_resamples_alike_whatever_numpys_global_generator(tanker):
@@ -292,3 +343,24 @@ def test_the_same_seed_resamples_alike_whatever_numpys_global_generator(tanker):
         ens.resample(np.log(weights), np.random.default_rng(0), force=True)
         runs.append(np.array([run.state.H[0] for run in ens.runs]))
     assert np.array_equal(runs[0], runs[1])
+
+
+@pytest.mark.parametrize("opening, released", [(1.0, True), (0.0, False)])
+def test_the_lift_separated_first_when_its_dump_valves_opened_and_no_members(tanker, opening,
+                                                                              released):
+    """The members' controllers open the dump valves at separation, as the lift's did: when
+    the purge readings say open where every held member's stayed shut, the lift has
+    separated before every member, and the members are released (they separate at their
+    next step); readings of shut valves release nothing."""
+    plant = coupled_plant(tanker)
+    sensors = sensors_of(tanker, plant.names, for_log=True)
+    est = Estimator(tanker, sensors, members=3, control="decentralized", plant=plant)
+    from flexlift.sensors.log import Reading
+
+    purges = [s.name for s in sensors if s.quantity == "purge"]
+    assert purges
+    est.assimilate(300.0, [])
+    est.assimilate(302.0, [Reading(301.0, name, opening) for name in purges])
+    assert est.counts.released == int(released)
+    est.assimilate(304.0, [])
+    assert all(run.state.sep.all() for run in est.ensemble.runs) == released

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from filterpy.monte_carlo import systematic_resample
+from scipy.stats import truncnorm
 
 from flexlift.ascent import kernel
 from flexlift.ascent.batch import advance_batch
@@ -82,6 +83,9 @@ class Ensemble:
         for run in self.runs:
             run.records = _own_weight(run.records)
         self.weight = np.ones(members)
+        #: each member's holding force as drawn at the start [N] (m, ng): its hold now less
+        #: this is the decay so far, which the timer law makes the same for any start
+        self.hold_start = np.zeros((members, self.plant.seabed.H0.size))
         self._draw(np.random.default_rng(seed))
         for run in self.runs:
             run.start()
@@ -108,6 +112,7 @@ class Ensemble:
         for i, run in enumerate(self.runs):
             self.weight[i] = 1.0 + p.weight * rng.standard_normal()
             run.state.H[:] = H0 * max(1.0 + p.holding * rng.standard_normal(), 0.0)
+            self.hold_start[i] = run.state.H
             run.state.n[:] *= 1.0 + p.gas * rng.standard_normal(run.state.n.size)
             run.switches.leak[:] = np.abs(p.leak * rng.standard_normal(run.switches.leak.size))
             self._set_weight(i)
@@ -150,33 +155,30 @@ class Ensemble:
         """Resample the members by their readings' likelihoods (``log_weights``) when the
         effective ensemble size falls below half the members, or when ``force``d (filterpy's
         systematic resampling); a member drawn twice runs on as a fork
-        (:meth:`~flexlift.ascent.loop.Ascent.fork`). The unknowns no reading sees directly
-        (the weight factor, the holding force while held) are then drawn from Liu and
-        West's (2001) kernel: each shrunk towards the weighted mean by ``a`` and spread by
-        ``sqrt(1 - a^2)`` times the weighted standard deviation, ``a = (3 d - 1) / (2 d)``
-        for the ``discount`` d: their mean and spread are kept, so resampling does not
-        collapse them; each bag's gas likewise (the copies part, and the load cells' update
-        has a spread to work on). Until a member has separated no reading has seen the hold:
-        the weights say nothing of it, so each slot keeps the hold it had (a draw from the
-        parents would only thin the prior's spread by chance). Returns whether it
-        resampled."""
+        (:meth:`~flexlift.ascent.loop.Ascent.fork`). The weight factor and each bag's gas
+        are then drawn from Liu and West's (2001) kernel: each shrunk towards the weighted
+        mean by ``a`` and spread by ``sqrt(1 - a^2)`` times the weighted standard deviation,
+        ``a = (3 d - 1) / (2 d)`` for the ``discount`` d: their mean and spread are kept, so
+        resampling does not collapse them, and the copies part. The holding force of a group
+        still held is drawn afresh from its prior truncated at the group's uplift now
+        (:meth:`held_draw`: all a held lift's readings say of its hold is that it is
+        above the uplift). Returns whether it resampled."""
         w = np.exp(log_weights - log_weights.max())
         w /= w.sum()
         if 1.0 / np.sum(w**2) >= self.m / 2 and not force:
             return False
         shrink = (3.0 * discount - 1.0) / (2.0 * discount)
         spread = math.sqrt(1.0 - shrink**2)
-        H = np.array([run.state.H for run in self.runs])  # (m, ng)
         n = np.array([run.state.n for run in self.runs])  # (m, nb)
-        kernels = {"weight": _kernel(self.weight, w), "H": _kernel(H, w), "n": _kernel(n, w)}
-        # the readings tell of the hold only once a member has separated (its motion, or
-        # its not moving when the lift does)
-        informed = any(bool(run.state.sep.any()) for run in self.runs)
+        kernels = {"weight": _kernel(self.weight, w), "n": _kernel(n, w)}
         # (filterpy walks its cumulative sum past the end when rounding leaves it just
         # below 1: the weights are given a sum a hair above 1)
         chosen = _systematic(w * (1.0 + 1e-12), rng)
         seen: set[int] = set()
         runs, weight, ended = [], np.empty(self.m), []
+        # each parent's decay of its hold so far, before any slot's draw moves its hold
+        decay = self.hold_start - np.array([run.state.H for run in self.runs])
+        hold_start = np.empty_like(self.hold_start)
         for slot, j in enumerate(chosen):
             j = int(j)
             run = self.runs[j].fork() if j in seen else self.runs[j]
@@ -186,24 +188,56 @@ class Ensemble:
             mean, sd = kernels["weight"]
             weight[slot] = max(shrink * self.weight[j] + (1.0 - shrink) * mean
                                + spread * sd * rng.standard_normal(), 0.05)
-            mean, sd = kernels["H"]
-            held = ~run.state.sep
-            if informed:
-                draw = (shrink * H[j] + (1.0 - shrink) * mean
-                        + spread * sd * rng.standard_normal(H.shape[1]))
-            else:  # no member has separated: no reading has seen the hold: the slot keeps its
-                draw = H[slot]
-            run.state.H[held] = np.maximum(draw[held], 0.0)
+            hold_start[slot] = self.held_draw(run, decay[j], rng)
             mean, sd = kernels["n"]
             run.state.n[:] = np.maximum(shrink * n[j] + (1.0 - shrink) * mean
                                         + spread * sd * rng.standard_normal(n.shape[1]), 0.0)
             run.end_held_block()
             runs.append(run)
             ended.append(self.ended[j])
-        self.runs, self.weight, self.ended = runs, weight, ended
+        self.runs, self.weight, self.ended, self.hold_start = runs, weight, ended, hold_start
         for i in range(self.m):
             self._set_weight(i)
         return True
+
+    def held_draw(self, run: Ascent, decay: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """``run``'s holding force of each group still held drawn afresh from the prior
+        truncated below at the group's uplift now (docs/theory/estimation.md#hold); returns
+        the holding forces at the start [N] that this draw stands for (the hold now plus
+        ``decay``).
+
+        ``decay`` [N] is the run's decay of its hold so far: its start less its hold now.
+        Under the timer law (dH/dt = -min(U, H_0) / T_b) the decay does not depend on the
+        start, so the prior of the hold now is the prior of the start shifted by it: a
+        normal of mean ``H_0 - decay`` and standard deviation ``holding H_0``. Under the
+        soil law the decay depends on the hold itself and the shift is an approximation. A
+        group whose uplift is not positive is not separating: its lower bound is 0."""
+        H, H0 = run.state.H, self.plant.seabed.H0
+        for g in np.flatnonzero(~run.state.sep):
+            mean, sd = H0[g] - decay[g], self.prior.holding * H0[g]
+            low = max(_uplift(run, g), 0.0)
+            if sd <= 0.0:
+                continue
+            a = (low - mean) / sd
+            if a > 8.0:  # the prior has no mass above the uplift: the least hold that holds
+                H[g] = low
+            else:
+                H[g] = float(truncnorm.rvs(a, np.inf, loc=mean, scale=sd, random_state=rng))
+        return H + decay
+
+    def release(self) -> None:
+        """Every member's held groups set to separate at their next step: the hold just below
+        the group's uplift (docs/theory/estimation.md#hold: the lift has separated, so its hold
+        is below its uplift now; held until now, it was above it a window ago). A group whose
+        uplift is not positive is left held."""
+        for i, run in enumerate(self.runs):
+            for g in np.flatnonzero(~run.state.sep):
+                uplift = _uplift(run, g)
+                if 0.0 < uplift < run.state.H[g]:
+                    below = uplift * (1.0 - 1e-9)
+                    self.hold_start[i, g] += below - run.state.H[g]
+                    run.state.H[g] = below
+            run.end_held_block()
 
     def split(self, column: np.ndarray) -> dict[str, np.ndarray]:
         """A column's parts by name."""
@@ -212,6 +246,14 @@ class Ensemble:
             out[name] = column[k:k + self.sizes[name]]
             k += self.sizes[name]
         return out
+
+
+def _uplift(run: Ascent, g: int) -> float:
+    """Holding group ``g``'s net uplift in ``run`` now [N]: its bags' buoyancy less its wet
+    weight (the member's own), as the loop's ``group_uplift`` reckons it."""
+    bags, attached, on = run.records.bags, run.switches.attached, run.records.bags.group == g
+    return float(bags.rho_g * np.sum(run.state.V[on] * attached[on] * bags.count[on])
+                 - run.records.seabed.group_weight[g])
 
 
 def _own_weight(records):

@@ -33,7 +33,11 @@ _HULL = {name: j for j, name in enumerate(HULL_VARS)}
 OBSERVED = ("depth", "pitch", "sling_force")
 #: the least standard deviation a reading is given in the update, by quantity [SI]: a
 #: sensor declared noiseless is not believed past the plant's own accuracy
-NOISE_FLOOR = {"depth": 0.02, "pitch": 2.0e-4, "sling_force": 200.0}
+NOISE_FLOOR = {"depth": 0.02, "pitch": 2.0e-4, "sling_force": 200.0, "purge": 0.05}
+#: the valves' feedback that weighs the members in resampling, not in the update: a member
+#: running the scenario's controller opens its dump valves as the lift's does only if its
+#: state is the lift's (at separation they open: the one reading that tells it at once)
+FEEDBACK = ("purge",)
 #: a reading this many predicted standard deviations off is not assimilated
 GATE = 6.0
 #: a member whose motion readings are off by this many standard deviations (root mean
@@ -80,6 +84,7 @@ class Counts:
     resampled: int = 0
     widened: int = 0
     lost_windows: int = 0
+    released: int = 0
     rejected: int = 0
     by_sensor_gated: dict = field(default_factory=dict)
 
@@ -139,12 +144,25 @@ class Estimator:
         sigma = np.maximum(noise, floor)
         motion = observed & np.array([q != "sling_force" for q in quantity])
         self.lost = False
-        if motion.any():  # the members whose motion explains the readings, then the update
+        # the members' own valves' feedback weighs them too (commanded members' valves are
+        # the commands, alike in every member: nothing to weigh)
+        # (a bag with no dump valve has no opening to predict: NaN, nothing to weigh)
+        feedback = (np.array([q in FEEDBACK for q in quantity]) & (not self.valves)
+                    & np.isfinite(Y).all(axis=1))
+        if motion.any() or feedback.any():  # the members that explain the readings
             r = (z[motion, None] - Y[motion]) / sigma[motion, None]
-            worst = np.mean(r**2, axis=0) > OUTLIER**2
+            worst = (np.mean(r**2, axis=0) > OUTLIER**2 if motion.any()
+                     else np.zeros(self.ensemble.m, dtype=bool))
             self.lost = bool(worst.mean() > LOST_SHARE)
-            if self.ensemble.resample(-0.5 * np.minimum(r**2, GATE**2).sum(axis=0),
-                                      self.rng, force=bool(worst.any() and not worst.all())):
+            log_w = -0.5 * np.minimum(r**2, GATE**2).sum(axis=0)
+            f = (z[feedback, None] - Y[feedback]) / sigma[feedback, None]
+            log_w = log_w - 0.5 * np.minimum(f**2, GATE**2).sum(axis=0)
+            depth = np.array([q == "depth" for q in quantity])
+            if self._separated_first(f, worst, z[depth, None] - Y[depth]):
+                self.ensemble.release()
+                self.counts.released += 1
+            if self.ensemble.resample(log_w, self.rng,
+                                      force=bool(worst.any() and not worst.all())):
                 self.counts.resampled += 1
                 Y = self._predicted(readings, again=True)
         used = gated(Y, z, sigma, observed)
@@ -160,6 +178,21 @@ class Estimator:
         self._command(readings, quantity)
         return [Prediction(r.time_s, r.sensor, r.value, float(mean[k]), float(std[k]),
                            bool(used[k])) for k, r in enumerate(readings)]
+
+    def _separated_first(self, f: np.ndarray, lost: np.ndarray, rise: np.ndarray) -> bool:
+        """Whether the lift has separated before every member (docs/theory/estimation.md#hold),
+        every member still held. Either its dump valves opened where every member's stayed
+        as they were (the members' controllers open them at separation, as the lift's did):
+        each member's normalised feedback innovations ``f`` (readings, members) off by more
+        than :data:`OUTLIER` in root mean square, the readings above the predictions; or,
+        without valve feedback, every member has ``lost`` the lift's motion and every
+        member's depth innovations ``rise`` [m] (readings, members) say the lift is above
+        it (a depth less than predicted)."""
+        if any(bool(run.state.sep.any()) for run in self.ensemble.runs):
+            return False
+        if f.size and np.all(np.mean(f**2, axis=0) > OUTLIER**2) and np.all(f.mean(axis=0) > 0):
+            return True
+        return bool(lost.all() and rise.size and np.all(rise.mean(axis=0) < 0))
 
     def _widen(self, Y, z, sigma, motion) -> np.ndarray:
         """The members' motion spread widened to cover the readings when more than half of
