@@ -71,3 +71,28 @@ def test_runs_of_one_numba_type_share_each_compiled_call(monkeypatch):
     runs = [prepare(s, control=c, duration=300.0) for s, c in _variants()]
     run_batch(runs)
     assert sizes and sizes[0] == 3 and max(sizes) == 3
+
+
+def test_a_runs_numba_type_is_found_once_and_again_when_a_record_is_replaced(monkeypatch):
+    """batch.loop_type: numba.typeof walks the inputs only when one of the run's seven
+    records is a new object; the type it gives is numba's own."""
+    import numba
+
+    from flexlift.ascent import batch
+
+    calls = []
+
+    def counted(value):
+        calls.append(1)
+        return numba.typeof(value)
+
+    monkeypatch.setattr(batch, "numba", type("N", (), {"typeof": staticmethod(counted)}))
+    run = prepare(load_scenario("tanker"), duration=60.0)
+    first = batch.loop_type(run)[1]
+    assert first == numba.typeof(run.inputs()) and len(calls) == 1
+    assert batch.loop_type(run)[1] is first and len(calls) == 1  # nothing replaced
+    # a record replaced by one whose arrays are of another type: found again, not the stale
+    run.state = type(run.state)(*[a.astype(np.float32) if isinstance(a, np.ndarray)
+                                  and a.dtype == np.float64 else a for a in run.state])
+    again = batch.loop_type(run)[1]
+    assert len(calls) == 2 and again != first and again == numba.typeof(run.inputs())

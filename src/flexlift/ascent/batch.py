@@ -15,6 +15,8 @@ own. The numbers are those of the runs one by one, to the last bit (tests/test_b
 
 from __future__ import annotations
 
+import weakref
+
 import numba
 import numpy as np
 from numba.typed import List
@@ -25,7 +27,10 @@ from flexlift.ascent.result import Result
 from flexlift.ascent.state import RET_NEED_U
 from flexlift.errors import SimulationError
 
-__all__ = ["advance_batch", "run_batch"]
+__all__ = ["advance_batch", "loop_type", "run_batch"]
+
+#: each run's loop inputs and their numba type as last found (:func:`loop_type`), by run
+_TYPES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def run_batch(runs: list[Ascent], summary_only: bool = True) -> list[Result | SimulationError]:
@@ -90,13 +95,15 @@ def _advance_together(runs: list[Ascent], stops: dict[int, int]) -> dict[int, in
     pending = list(stops)
     while pending:
         groups: dict[object, list[int]] = {}
+        inputs = {}
         for i in pending:
-            groups.setdefault(numba.typeof(runs[i].inputs()), []).append(i)
+            inputs[i], kind = loop_type(runs[i])
+            groups.setdefault(kind, []).append(i)
         pending = []
-        for members in groups.values():
-            loops = List()
+        for kind, members in groups.items():
+            loops = List.empty_list(kind)  # List() would find the type again, slowly
             for i in members:
-                loops.append(runs[i].inputs())
+                loops.append(inputs[i])
             k_stops = np.array([stops[i] for i in members], dtype=np.int64)
             codes = np.zeros(len(members), dtype=np.int64)
             kernel.advance_many(loops, k_stops, codes)
@@ -107,3 +114,22 @@ def _advance_together(runs: list[Ascent], stops: dict[int, int]) -> dict[int, in
                 else:
                     done[i] = code
     return done
+
+
+def loop_type(run: Ascent) -> tuple:
+    """``run``'s :meth:`~flexlift.ascent.loop.Ascent.inputs` and their numba type.
+
+    ``numba.typeof`` walks the inputs' ~150 arrays in Python (about a millisecond: on the
+    tanker's ensemble more than its compiled chunks take). The inputs are seven records,
+    each an immutable tuple of arrays and numbers, and a run changes one only by putting a
+    new record in its place (a grown record, a chunk's noise, a fork's copies): inputs whose
+    seven records are the very objects of the last call have the last call's type. (An
+    array's type also holds its flags; one made read-only in place would keep a stale type
+    here, and the compiled call then refuses it: nothing in flexlift does so.)"""
+    inputs = run.inputs()
+    known = _TYPES.get(run)
+    if known is not None and all(a is b for a, b in zip(known[0], inputs, strict=True)):
+        return inputs, known[1]
+    kind = numba.typeof(inputs)
+    _TYPES[run] = (inputs, kind)
+    return inputs, kind
