@@ -12,7 +12,9 @@ Goals (issue 41, the tanker): 0 unsafe and 0 incomplete single failures; 0 unsaf
 complete salvage cases; fewer bags than 73 and at most 1.25 x the N-1 bound; <= 30 min.
 
 Usage: ``python benchmarks/design.py [--cases tanker,pipeline,heavy] [--budget 24]
-[--limit 1800] [--repeat]``; writes ``benchmarks/design.json``.
+[--limit 1800] [--repeat] [--workers 2]``; writes ``benchmarks/design.json``, merging: a case
+run replaces that case's row (with its own budget, load averages and date), the rows of the
+cases not run are kept as they were.
 """
 
 from __future__ import annotations
@@ -31,10 +33,11 @@ CASES = {"tanker": "tanker", "pipeline": "pipeline",
          "heavy": str(ROOT / "benchmarks" / "design_heavy.yaml")}
 
 
-def run_case(name: str, budget: int, limit: float, folder: Path, tag: str = "") -> dict:
+def run_case(name: str, budget: int, limit: float, folder: Path, tag: str = "",
+             workers: int = 2) -> dict:
     out = folder / f"design-{name}{tag}"
     cmd = [sys.executable, "-m", "flexlift", "design", CASES[name], "--out", str(out),
-           "--budget", str(budget), "--workers", "2", "--json"]
+           "--budget", str(budget), "--workers", str(workers), "--json"]
     env = dict(os.environ, PYTHONPATH=str(ROOT / "src"), MPLBACKEND="Agg")
     t0 = time.perf_counter()
     try:
@@ -43,22 +46,36 @@ def run_case(name: str, budget: int, limit: float, folder: Path, tag: str = "") 
         return {"case": name, "wall_s": round(time.perf_counter() - t0, 1),
                 "finished": False, "note": f"stopped at the {limit:g} s limit"}
     row = {"case": name, "wall_s": round(time.perf_counter() - t0, 1), "rc": res.returncode,
-           "finished": res.returncode in (0, 1)}
+           "finished": res.returncode in (0, 1), "command": " ".join(cmd[1:])}
     if not row["finished"]:
         row["stderr"] = res.stderr[-800:]
         return row
     s = json.loads(res.stdout)
     b, lb = s["best"], s["lower_bound"]
     row.update(evaluations=s["evaluations"], lower_bound=lb, found=s["found"],
+               no_plan=s["no_plan"], space=s["space"],
                own_plan={k: v for k, v in (s["own_plan"] or {}).items() if k != "statics"})
     if b is not None:
         row["plan"] = {k: b.get(k) for k in ("bags", "types", "points", "internal",
-                                             "supply_free_air_m3_min", "key")}
+                                             "supply_free_air_m3_min", "sequence", "key")}
         row.update(bags=b["bags"], model=b["types"][0], points=len(b["points"]),
                    ratio_to_n_minus_1=round(b["bags"] / lb["n_minus_1"], 3),
                    contingency=b["contingency"], p_unsafe=b["p_unsafe"],
                    salvage_counts=b["salvage_counts"])
     return row
+
+
+def merge(old: dict, rows: list[dict]) -> dict:
+    """``old`` (the file's content) with ``rows`` replacing the rows of the same case; the
+    other cases' rows are kept, in their order, the new cases after them."""
+    cases = list(old.get("cases", []))
+    for row in rows:
+        at = [i for i, r in enumerate(cases) if r.get("case") == row["case"]]
+        if at:
+            cases[at[0]] = row
+        else:
+            cases.append(row)
+    return {**{k: v for k, v in old.items() if k != "cases"}, "cases": cases}
 
 
 def main(argv=None) -> dict:
@@ -67,22 +84,27 @@ def main(argv=None) -> dict:
     ap.add_argument("--budget", type=int, default=24)
     ap.add_argument("--limit", type=float, default=1800.0, help="per case [s]")
     ap.add_argument("--repeat", action="store_true", help="run each again (same seed)")
+    ap.add_argument("--workers", type=int, default=2, help="local workers per search")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "design.json"))
     args = ap.parse_args(argv)
-    result = {"load_before": os.getloadavg(), "budget": args.budget, "cases": []}
+    path = Path(args.out)
+    old = json.loads(path.read_text()) if path.exists() else {}
+    rows = []
     with tempfile.TemporaryDirectory(prefix="flexlift-bench-design-") as tmp:
         for name in args.cases.split(","):
-            row = run_case(name, args.budget, args.limit, Path(tmp))
+            before = os.getloadavg()
+            row = run_case(name, args.budget, args.limit, Path(tmp), workers=args.workers)
             if args.repeat and row.get("finished"):
                 # a fresh folder: the same seed from nothing (no cache), not a resume
-                again = run_case(name, args.budget, args.limit, Path(tmp), tag="-again")
+                again = run_case(name, args.budget, args.limit, Path(tmp), tag="-again",
+                                 workers=args.workers)
                 row["repeat"] = {"wall_s": again["wall_s"], "fresh_folder": True,
                                  "same_plan": again.get("plan") == row.get("plan")}
-            result["cases"].append(row)
-            Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
-    result["load_after"] = os.getloadavg()
-    Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
-    return result
+            row.update(budget=args.budget, workers=args.workers, load_before=before,
+                       load_after=os.getloadavg(), date=time.strftime("%Y-%m-%d"))
+            rows.append(row)
+            path.write_text(json.dumps(merge(old, rows), indent=1) + "\n")
+    return merge(old, rows)
 
 
 if __name__ == "__main__":

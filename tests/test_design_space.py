@@ -53,15 +53,15 @@ def test_key_unchanged_for_the_first_parts():
     caches still hit); each new part, set, changes it."""
     c = _cand()
     first = {k: v for k, v in asdict(c).items()
-             if k not in ("internal", "point_models", "supply_free_air_m3_min")}
+             if k not in ("internal", "point_models", "supply_free_air_m3_min", "sequence")}
     assert c.key() == hashlib.sha256(json.dumps(first, sort_keys=True).encode()
                                      ).hexdigest()[:20]
     keys = {c.key(), _cand(internal=2).key(), _cand(supply_free_air_m3_min=30.0).key(),
             _cand(point_models=("open_parachute_5t", "open_parachute_10t",
                                 "open_parachute_5t")).key(),
             _cand(point_models=("open_parachute_10t", "open_parachute_5t",
-                                "open_parachute_5t")).key()}
-    assert len(keys) == 5
+                                "open_parachute_5t")).key(), _cand(sequence="none").key()}
+    assert len(keys) == 6
 
 
 def test_an_old_cache_still_answers(toy, tmp_path):
@@ -76,7 +76,7 @@ def test_an_old_cache_still_answers(toy, tmp_path):
     for line in path.read_text().splitlines():
         row = json.loads(line)
         cand = row["result"]["candidate"]
-        for k in ("internal", "point_models", "supply_free_air_m3_min"):
+        for k in ("internal", "point_models", "supply_free_air_m3_min", "sequence"):
             del cand[k]
         # the key as the first designer wrote it: the checksum of the eight values
         row["key"] = hashlib.sha256(json.dumps(cand, sort_keys=True).encode()

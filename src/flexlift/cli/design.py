@@ -4,7 +4,8 @@ would run (the static checks, the nominal ascent, every single failure, the salv
 The search (optuna's NSGA-II, seeded) chooses the catalogue bag (or one per lift point,
 --per-point-types), the lift points and the bags at each, the internal bags in the tanks,
 and, when given several values, the control mode, the planned ascent speed, the breakout
-pull, the dump valve and the compressor's supply; each candidate goes up the ladder only as far as it
+pull, the dump valve and the compressor's supply, and a staged lift's staging (its own
+control.sequence or every bag at once); each candidate goes up the ladder only as far as it
 survives. The folder (default ``flexlift-out/design-<scenario>``) keeps every evaluation:
 the same command again after an interruption resumes and gives the same plan.
 
@@ -78,6 +79,9 @@ def add_parser(sub) -> None:
     p.add_argument("--supply", type=_list(float, "--supply"), default=None, metavar="LIST",
                    help="compressor free-air deliveries [m3/min] to choose from; auto: the "
                    "scenario's gas supply (default)")
+    p.add_argument("--sequence", type=_list(str, "--sequence"), default=None, metavar="LIST",
+                   help="staging to choose from: own (the scenario's control.sequence), none "
+                   "(every bag at once) (default: both for a staged lift, else own)")
     p.add_argument("--objectives", type=_list(str, "--objectives"), default=["bags"],
                    metavar="LIST", help="bags, gas and/or cost (several: a Pareto front)")
     p.add_argument("--target", type=float, default=0.01,
@@ -135,7 +139,7 @@ def _main(args: argparse.Namespace) -> int:
                        count=args.count, modes=args.modes, speeds=args.speeds,
                        pulls=args.pulls, dump_factors=args.dump_valve, span=args.span,
                        internal=args.internal, per_point=args.per_point_types,
-                       supplies=args.supply)
+                       supplies=args.supply, sequences=args.sequence)
     options = Options(budget=args.budget, population=args.population, seed=args.seed,
                       target=args.target, objectives=tuple(args.objectives),
                       up_to=_up_to(args.up_to, scenario, args.quiet or args.json),

@@ -18,20 +18,23 @@ RUNG_TEXT = {"statics": "static checks", "nominal": "nominal ascent",
              "contingency": "single failures", "salvage": "salvage study"}
 
 
-def nearby(rows: list[dict], best: dict | None, n: int = 8) -> list[dict]:
-    """The rejected candidates nearest the proposal (by bags; the fewest when none): each
-    with the rung, the check and why it failed."""
+def nearby(rows: list[dict], best: dict | None, n: int = 8,
+           keep_order: bool = False) -> list[dict]:
+    """The rejected candidates nearest the proposal (by bags; the fewest when none), or in
+    the order given (``keep_order``): each with the rung, the check and why it failed."""
     seen, out = set(), []
     ref = best["bags"] if best else 0
-    for r in sorted((r for r in rows if not r["passed"]),
-                    key=lambda r: (abs(r["bags"] - ref), r["bags"])):
+    rejected = [r for r in rows if not r["passed"]]
+    for r in (rejected if keep_order else
+              sorted(rejected, key=lambda r: (abs(r["bags"] - ref), r["bags"]))):
         if r["candidate_key"] in seen:
             continue
         seen.add(r["candidate_key"])
         rej = r.get("rejected") or {}
         c = r["candidate"]
         out.append({"bags": r["bags"], "model": " + ".join(c.get("point_models") or [c["model"]]),
-                    "internal": c.get("internal", 0),
+                    "internal": c.get("internal", 0), "reached": r["reached"],
+                    "sequence": c.get("sequence", "own"),
                     "points": r["candidate"]["points"], "mode": r["candidate"]["mode"],
                     "rung": rej.get("rung"), "check": rej.get("check"),
                     "why": rej.get("why", "")})
@@ -40,11 +43,45 @@ def nearby(rows: list[dict], best: dict | None, n: int = 8) -> list[dict]:
     return out
 
 
+#: the criteria a run's cause names (:func:`flexlift.ascent` outcome text), in its words
+CRITERIA = ("ascent velocity", "descent velocity", "bending utilisation", "pitch",
+            "surface breach", "resettle", "slope passed")
+
+
+def climbed(rows: list[dict], n: int = 5) -> list[dict]:
+    """The rejected candidates that climbed highest up the ladder (fewest bags first among
+    those), in :func:`nearby`'s form: a search without a plan leads with these."""
+    from flexlift.design.search import RUNGS
+
+    order = sorted((r for r in rows if not r["passed"]),
+                   key=lambda r: (-RUNGS.index(r["reached"]), r["bags"]))
+    return nearby(order, None, n, keep_order=True)
+
+
+def failed_criteria(rows: list[dict]) -> dict:
+    """Of the candidates rejected by a dynamic rung, how many broke each criterion: the
+    nominal ascent's by the criteria its cause names; the single failures' by the kind and
+    phase of the case that stopped the candidate (the first unsafe or incomplete one)."""
+    nominal, single = Counter(), Counter()
+    for r in rows:
+        rej = r.get("rejected") or {}
+        if rej.get("rung") == "nominal":
+            why = rej.get("why", "")
+            for c in CRITERIA:
+                if c in why:
+                    nominal[c] += 1
+        elif rej.get("rung") == "contingency":
+            f = (r.get("contingency") or {}).get("first") or {}
+            single[f"{f.get('kind')} at {f.get('phase')} ({f.get('outcome')})"] += 1
+    return {"nominal": dict(nominal.most_common()), "contingency": dict(single.most_common())}
+
+
 def no_plan(rows: list[dict], space) -> dict:
-    """What no candidate survived and what would change it."""
+    """What no candidate survived, which criteria broke, and what would change it."""
     where = Counter((r.get("rejected") or {}).get("rung") for r in rows)
     checks = Counter(f"{(r.get('rejected') or {}).get('rung')}: "
                      f"{(r.get('rejected') or {}).get('check')}" for r in rows)
+    broke = failed_criteria(rows)
     hints = []
     if checks and all(k.startswith("statics") for k in checks):
         worst = checks.most_common(1)[0][0]
@@ -53,15 +90,27 @@ def no_plan(rows: list[dict], space) -> dict:
                          "offered cannot carry the required lift on this hull")
         if "strength" in worst:
             hints.append("more lift points, spreading the lift along the hull")
+    if where.get("nominal"):
+        named = ", ".join(f"{k} {v}" for k, v in broke["nominal"].items()) or "unsafe"
+        hint = (f"the nominal ascent was unsafe for all {where['nominal']} candidates that "
+                f"reached it (criteria broken, by candidates: {named})")
+        if getattr(space, "staged", False) and tuple(space.sequences) == ("own",):
+            hint += "; on a staged lift, every bag at once (--sequence own,none)"
+        hint += ("; a slower planned ascent (--speeds) or a larger dump valve (--dump-valve) "
+                 "against a runaway ascent")
+        hints.append(hint)
     if where.get("contingency"):
-        hints.append("a second supply (--supply) or a larger dump valve (--dump-valve), or more bags "
-                     "(--over): some single failure is unsafe for every plan tried")
+        kinds = ", ".join(f"{k}: {v}" for k, v in broke["contingency"].items())
+        hints.append(f"some single failure was unsafe for every plan tried ({kinds}); a second "
+                     "supply (--supply) or a larger dump valve (--dump-valve), or more bags "
+                     "(--over)")
     if where.get("salvage"):
         hints.append("a slower planned ascent (--speeds) or more margin (--over): the salvage "
                      "study's P(unsafe) bound stays above the target")
     return {"rejected_at": dict(where), "checks": dict(checks.most_common(8)),
+            "criteria": broke,
             "what_would_change_it": hints or ["a wider search (--budget, --over, --points)"],
-            "best_candidates": nearby(rows, None, 5)}
+            "best_candidates": climbed(rows, 5)}
 
 
 def _figure(summary: dict, rows: list[dict]) -> bytes:
@@ -156,15 +205,21 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
              "<table>" + _row(["bags", "model", "gas m3", "cost", "P(unsafe)"], True)
              + "".join(_row([p["bags"], " + ".join(p["types"]), p["gas_m3"], p["cost"],
                              _p(p["p_unsafe"])]) for p in summary["pareto"]) + "</table>",
-             "<h2>Why the nearby alternatives were rejected</h2><table>"
+             "<h2>" + ("Why the nearby alternatives were rejected" if summary["best"] else
+                       "The candidates that climbed highest, and why each was rejected")
+             + "</h2><table>"
              + _row(["bags", "model", "points", "internal", "rung", "check", "why"], True)
              + "".join(_row([n["bags"], n["model"], n["points"], n.get("internal", 0),
                              RUNG_TEXT.get(n["rung"], ""), n["check"], n["why"]])
                        for n in summary["nearby"]) + "</table>"]
     if summary["no_plan"]:
         np_ = summary["no_plan"]
+        crit = np_.get("criteria") or {}
+        broke = "".join(f"<li>{html.escape(RUNG_TEXT[k])}: " + html.escape(", ".join(
+            f"{c} {n}" for c, n in v.items())) + "</li>" for k, v in crit.items() if v)
         parts.append("<h2>No plan: what would change it</h2><ul>" + "".join(
-            f"<li>{html.escape(h)}</li>" for h in np_["what_would_change_it"]) + "</ul>")
+            f"<li>{html.escape(h)}</li>" for h in np_["what_would_change_it"]) + "</ul>"
+            + (f"<p>What broke, by candidates:</p><ul>{broke}</ul>" if broke else ""))
     parts.append(f"<h2>Evaluations</h2><p>{ev['candidates']} candidates ({ev['distinct']} "
                  "distinct); reached each rung: " + ", ".join(
                      f"{RUNG_TEXT[k]} {v}" for k, v in ev["reached"].items())

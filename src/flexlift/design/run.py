@@ -127,8 +127,10 @@ def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
                   "dump_valve_factors": list(space.dump_valve_factors),
                   "internal": list(space.internal), "per_point_types": space.per_point,
                   "supplies_free_air_m3_min": list(space.supplies),
+                  "sequences": list(space.sequences),
                   "span_m": list(space.span_m)},
-        "nearby": report.nearby(rows, best),
+        # no plan: the candidates that climbed highest, not merely the fewest bags
+        "nearby": report.nearby(rows, best) if best else report.climbed(rows, 8),
         "elapsed_s": round(elapsed, 2),
     }
 
@@ -168,6 +170,7 @@ def _brief(r: dict) -> dict:
             "ascent_speed_m_s": r["candidate"]["ascent_speed_m_s"],
             "breakout_pull_t": r["candidate"]["breakout_pull_t"],
             "dump_valve_factor": r["candidate"]["dump_valve_factor"],
+            "sequence": cand.sequence,
             "reached": r["reached"], "contingency": c.get("counts"),
             "contingency_cases": c.get("cases"), "p_unsafe": s.get("p_unsafe"),
             "salvage_counts": s.get("counts"), "key": r["candidate_key"]}
@@ -190,8 +193,8 @@ def _write(folder: Path, summary: dict, found: dict, scenario) -> None:
 def _csv(rows: list[dict]) -> str:
     cols = ("trial", "key", "model", "bags", "points", "counts", "internal", "point_models",
             "mode", "ascent_speed_m_s", "breakout_pull_t", "dump_valve_factor",
-            "supply_free_air_m3_min", "gas_m3", "cost", "reached", "passed", "rejected_rung",
-            "rejected_check", "rejected_why")
+            "supply_free_air_m3_min", "sequence", "gas_m3", "cost", "reached", "passed",
+            "rejected_rung", "rejected_check", "rejected_why")
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(cols)
@@ -201,7 +204,7 @@ def _csv(rows: list[dict]) -> str:
                     " ".join(map(str, r["counts"])), c.get("internal", 0),
                     " ".join(c.get("point_models") or ()), c["mode"], c["ascent_speed_m_s"],
                     c["breakout_pull_t"], c["dump_valve_factor"],
-                    c.get("supply_free_air_m3_min"), r.get("gas_m3"),
+                    c.get("supply_free_air_m3_min"), c.get("sequence", "own"), r.get("gas_m3"),
                     r.get("cost"), r["reached"], r["passed"], rej.get("rung", ""),
                     rej.get("check", ""), rej.get("why", "")])
     return buf.getvalue()

@@ -120,7 +120,8 @@ def _suggest(trial, space: Space, ev) -> Candidate:
                      dump_valve_factor=pick("dump_valve_factor", space.dump_valve_factors),
                      internal=internal,
                      point_models=tuple(point_models) if len(set(point_models)) > 1 else None,
-                     supply_free_air_m3_min=pick("supply_free_air_m3_min", space.supplies))
+                     supply_free_air_m3_min=pick("supply_free_air_m3_min", space.supplies),
+                     sequence=pick("sequence", space.sequences))
 
 
 class Evaluator:

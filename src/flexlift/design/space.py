@@ -8,7 +8,9 @@ the hull; or a count per point the user fixes), the control mode, the planned as
 the breakout pull, the dump valve as a factor on the catalogue bag's, the internal bags
 (``internal`` of the ``bags``, in the tanks: :mod:`flexlift.design.internal`), one catalogue
 bag per lift point (``point_models``: :mod:`flexlift.design.mixed`) and the compressor's
-free-air delivery (``gas.supply_free_air_m3_min``). Every part is a tuple of allowed values;
+free-air delivery (``gas.supply_free_air_m3_min``) and, for a staged lift (``control.sequence``),
+the staging (``sequence``: ``own``, the scenario's stages, or ``none``, every bag at once;
+docs/theory/design.md#staging). Every part is a tuple of allowed values;
 a part given one value is fixed by the user. The lift points are placed by the balanced layout's rule
 (:func:`flexlift.loads.balance.equal_share_positions`): the n bags' equal-load centroids,
 grouped in order into the points by their counts, each point at its group's mean, so the
@@ -33,10 +35,13 @@ from flexlift.scenario import catalogue
 
 #: the variables of a candidate, in the order the optimiser asks for them
 VARIABLES = ("model", "points", "internal", "over", "mode", "ascent_speed_m_s",
-             "breakout_pull_t", "dump_valve_factor", "supply_free_air_m3_min")
+             "breakout_pull_t", "dump_valve_factor", "supply_free_air_m3_min", "sequence")
+#: the staging choices: the scenario's own ``control.sequence``, or none (every bag at once)
+SEQUENCES = ("own", "none")
 #: the parts added after the first caches: left out of the key at these values, so that a
 #: candidate without them keeps the key it had
-NEW_DEFAULTS = {"internal": 0, "point_models": None, "supply_free_air_m3_min": None}
+NEW_DEFAULTS = {"internal": 0, "point_models": None, "supply_free_air_m3_min": None,
+                "sequence": "own"}
 
 
 @dataclass(frozen=True)
@@ -44,7 +49,8 @@ class Candidate:
     """One plan to evaluate: its bag, points and counts (``count`` external bags at every
     point, one more at ``extra`` of them; ``internal`` more in the tanks), its control and
     equipment choices; ``point_models`` each point's own catalogue bag (aft to bow), None:
-    ``model`` at every point; ``supply_free_air_m3_min`` None: the scenario's supply."""
+    ``model`` at every point; ``supply_free_air_m3_min`` None: the scenario's supply;
+    ``sequence`` ``own``: the scenario's staging (if any), ``none``: every bag at once."""
 
     model: str
     points: int
@@ -57,6 +63,7 @@ class Candidate:
     internal: int = 0
     point_models: tuple[str, ...] | None = None
     supply_free_air_m3_min: float | None = None
+    sequence: str = "own"
 
     @property
     def bags(self) -> int:
@@ -97,6 +104,8 @@ class Space:
     internal: tuple[int, int] = (0, 0)  # inclusive range: internal bags of the bags in all
     per_point: bool = False  # one catalogue bag per lift point
     supplies: tuple[float | None, ...] = (None,)  # free-air deliveries [m^3/min]; None: own
+    sequences: tuple[str, ...] = ("own",)  # staging: the scenario's own, or none
+    staged: bool = False  # the scenario is a staged lift (control.sequence)
     span_m: tuple[float, float] | None = None
     entries: dict = field(default_factory=dict, compare=False)  # model -> catalogue entry
 
@@ -107,7 +116,7 @@ class Space:
                  "ascent_speed_m_s": self.ascent_speeds, "breakout_pull_t": self.breakout_pulls,
                  "dump_valve_factor": self.dump_valve_factors,
                  "internal": _range(self.internal),
-                 "supply_free_air_m3_min": self.supplies}
+                 "supply_free_air_m3_min": self.supplies, "sequence": self.sequences}
         if self.per_point:
             parts["model"] = ()  # asked point by point
         return {k: v[0] for k, v in parts.items() if len(v) == 1}
@@ -119,15 +128,15 @@ def _range(pair) -> tuple:
 
 def make_space(scenario, models=None, points=None, over=None, count=None, modes=None,
                speeds=None, pulls=None, dump_factors=None, span=None, internal=None,
-               per_point=False, supplies=None) -> Space:
+               per_point=False, supplies=None, sequences=None) -> Space:
     """The search space of ``scenario``: each part as given (a sequence of allowed values, a
     ``(low, high)`` range for ``points``, ``over`` and ``internal``), else its default
     (every catalogue bag that is not kept as published, 1..12 points (or up to twice the
     user's own plan's lift points, when more: a long line needs its spans short), 0..12 bags
     over the fewest, 0..the most internal bags the tanks hold of the smallest bag offered, the
-    scenario's mode, speed, pull and supply, the catalogue's dump valve); ``per_point``: one
-    catalogue bag per lift point. An empty or contradictory part is an InputError (one
-    line)."""
+    scenario's mode, speed, pull and supply, the catalogue's dump valve; a staged lift's
+    staging ``own`` or ``none``, an unstaged one's ``own``); ``per_point``: one catalogue bag
+    per lift point. An empty or contradictory part is an InputError (one line)."""
     cat = catalogue.load(scenario.lift.catalogue_file)
     if models is None:
         models = tuple(n for n, e in cat.items() if not e.get("as_published"))
@@ -152,7 +161,9 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
                   span_m=_span(span, scenario.hull.length_m),
                   entries={m: cat[m] for m in models},
                   internal=_internal(scenario, internal, [cat[m] for m in models]),
-                  per_point=bool(per_point), supplies=_supplies(supplies))
+                  per_point=bool(per_point), supplies=_supplies(supplies),
+                  sequences=_sequences(scenario, sequences),
+                  staged=scenario.control.sequence is not None)
     if space.per_point:
         mixed.check_one_type(space.entries)
     for name, values in (("--modes", space.modes), ("--speeds", space.ascent_speeds),
@@ -181,6 +192,24 @@ def _internal(scenario, value, entries) -> tuple[int, int]:
         raise InputError("--internal", f"{lo}..{hi}", f"the tanks hold at most {most} of the "
                          "bags offered (docs/theory/design.md#internal-bags)")
     return lo, hi
+
+
+def _sequences(scenario, values) -> tuple[str, ...]:
+    """The staging choices: as given (``own``, ``none``), else both for a staged lift (a
+    candidate's layout is not the one the scenario's stages were drawn for: the stages of
+    ``group_size`` bags span other lengths of the structure) and ``own`` for an unstaged
+    one."""
+    staged = scenario.control.sequence is not None
+    if values is None:
+        return SEQUENCES if staged else ("own",)
+    out = tuple(dict.fromkeys(str(v) for v in values))
+    for v in out:
+        if v not in SEQUENCES:
+            raise InputError("--sequence", v, "own (the scenario's control.sequence) or none "
+                             "(every bag at once)")
+    if not out:
+        raise InputError("--sequence", "", "give at least one value: own or none")
+    return out
 
 
 def _supplies(values) -> tuple[float | None, ...]:
@@ -253,7 +282,7 @@ def catalogue_bag(candidate: Candidate, space: Space) -> dict:
 def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dict:
     """The dotted scenario changes that make ``candidate`` the plan: the catalogue bag, its
     lift points listed in ``lift.bags`` (clusters by ``count``, each of its point's bag's
-    lift), its internal bags over the tanks, the control and supply choices."""
+    lift), its internal bags over the tanks, the control, staging and supply choices."""
     lift_int = float(space.entries[candidate.model]["lift_t"])
     inner = tanks.internal_specs(scenario, hull, candidate.internal, lift_int)
     counts = candidate.counts()
@@ -268,6 +297,8 @@ def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dic
            "control.breakout_pull_t": candidate.breakout_pull_t}
     if candidate.supply_free_air_m3_min is not None:
         out["gas.supply_free_air_m3_min"] = candidate.supply_free_air_m3_min
+    if candidate.sequence == "none":
+        out["control.sequence"] = None  # every bag at once
     if scenario.pipe is not None and scenario.pipe.lift_points is not None:
         out["pipe.lift_points"] = None  # the candidate's lift.bags place the bags, not the pipe's
     return out

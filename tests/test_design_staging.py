@@ -1,0 +1,126 @@
+"""The designer and a staged lift (issue 41; docs/theory/design.md#staging): the staging is a
+choice of the search (the scenario's own control.sequence, or every bag at once), and a
+search without a plan leads with the candidates that climbed highest and names the criteria
+they broke. The pipeline's finding pinned: its own stages of four bags, kept on a layout of
+44 points, make the nominal ascent run away; the same layout lifted at once is safe."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from flexlift import load_scenario
+from flexlift.cli import main
+from flexlift.design import report
+from flexlift.design.dynamic import nominal
+from flexlift.design.space import Candidate, candidate_changes, make_space
+from flexlift.structure.hull import hull_from_scenario
+
+TOY = str(Path(__file__).parent / "data" / "design_beam.yaml")
+
+
+@pytest.fixture(scope="module")
+def pipe():
+    return load_scenario("pipeline")
+
+
+def _pipe_candidate(sequence: str, points: int = 44) -> Candidate:
+    return Candidate(model="enclosed_10t", points=points, count=1, extra=0,
+                     mode="decentralized", ascent_speed_m_s=0.2, breakout_pull_t=20.0,
+                     dump_valve_factor=1.0, sequence=sequence)
+
+
+def test_the_staging_is_searched_on_a_staged_lift_only(pipe):
+    """A staged lift (the pipeline) offers its own stages and none; an unstaged one (the toy)
+    keeps its own, not asked; given, the choice is as given."""
+    assert make_space(pipe, models=["enclosed_10t"]).sequences == ("own", "none")
+    toy = load_scenario(TOY)
+    space = make_space(toy, models=["open_parachute_5t"])
+    assert space.sequences == ("own",) and space.fixed()["sequence"] == "own"
+    assert make_space(pipe, models=["enclosed_10t"], sequences=["none"]).fixed()[
+        "sequence"] == "none"
+
+
+def test_a_candidate_lifted_at_once_drops_the_sequence(pipe):
+    space = make_space(pipe, models=["enclosed_10t"])
+    hull = hull_from_scenario(pipe)
+    own = pipe.with_changes(**candidate_changes(_pipe_candidate("own"), space, hull, pipe))
+    once = pipe.with_changes(**candidate_changes(_pipe_candidate("none"), space, hull, pipe))
+    assert own.control.sequence.group_size == 4 and once.control.sequence is None
+    assert _pipe_candidate("own").key() != _pipe_candidate("none").key()
+
+
+def test_the_pipelines_own_stages_run_away_on_another_layout(pipe):
+    """44 points of one enclosed 10 t bag: with the scenario's stages of four bags the
+    nominal ascent breaks its speed limit (a bag rising at over 1 m/s, the limit 0.6 m/s;
+    measured 1.21 m/s); lifted at once it is safe (docs/theory/design.md#staging)."""
+    space = make_space(pipe, models=["enclosed_10t"])
+    hull = hull_from_scenario(pipe)
+    runs = nominal([pipe.with_changes(**candidate_changes(_pipe_candidate(s), space, hull,
+                                                           pipe)) for s in ("own", "none")])
+    assert runs[0]["outcome"] == "unsafe" and "ascent velocity" in runs[0]["why"]
+    assert runs[1]["outcome"] == "safe", runs[1]["why"]
+
+
+def _row(bags, rung, why, kind=None, phase=None):
+    r = {"bags": bags, "passed": False, "reached": rung, "candidate_key": f"k{bags}",
+         "candidate": {"model": "enclosed_10t", "points": bags, "mode": "decentralized"},
+         "rejected": {"rung": rung, "check": "unsafe" if rung != "statics" else "strength",
+                      "why": why}}
+    if rung == "contingency":
+        r["contingency"] = {"first": {"kind": kind, "phase": phase, "outcome": "unsafe"}}
+    return r
+
+
+def test_no_plan_leads_with_the_highest_climbers_and_names_what_broke(pipe):
+    rows = [_row(9, "statics", "hull girder utilisation 16.15"),
+            _row(30, "nominal", "ascent velocity: p8 rose faster; bending utilisation: ..."),
+            _row(35, "nominal", "ascent velocity: p16 rose faster; descent velocity: ..."),
+            _row(40, "contingency", "unsafe on bag_rupture", "bag_rupture", "pull")]
+    space = make_space(pipe, models=["enclosed_10t"], sequences=["own"])
+    np_ = report.no_plan(rows, space)
+    assert [b["bags"] for b in np_["best_candidates"]] == [40, 30, 35, 9]
+    assert np_["criteria"]["nominal"] == {"ascent velocity": 2, "bending utilisation": 1,
+                                          "descent velocity": 1}
+    assert np_["criteria"]["contingency"] == {"bag_rupture at pull (unsafe)": 1}
+    hints = " ".join(np_["what_would_change_it"])
+    assert "--sequence own,none" in hints and "bag_rupture at pull (unsafe): 1" in hints
+    # with the staging already searched the hint does not ask for it again
+    both = report.no_plan(rows, make_space(pipe, models=["enclosed_10t"]))
+    assert "--sequence" not in " ".join(both["what_would_change_it"])
+
+
+def test_bad_sequence_exit_2(tmp_path, capsys):
+    code = main(["design", "pipeline", "--sequence", "sometimes", "--out",
+                 str(tmp_path / "o"), "--up-to", "statics"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "--sequence" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_summary_lists_the_staging(tmp_path, capsys):
+    code = main(["design", "pipeline", "--up-to", "statics", "--budget", "12", "--out",
+                 str(tmp_path / "o"), "--json", "--no-compare"])
+    s = json.loads(capsys.readouterr().out)
+    assert code == 0 and s["space"]["sequences"] == ["own", "none"]
+    assert "sequence" in (tmp_path / "o" / "candidates.csv").read_text().splitlines()[0]
+
+
+def test_the_benchmark_merges_rows_by_case():
+    """benchmarks/design.py run on one case replaces that case's row and keeps the others
+    (it overwrote the whole file before)."""
+    import importlib.util
+
+    path = Path(__file__).parents[1] / "benchmarks" / "design.py"
+    spec = importlib.util.spec_from_file_location("bench_design", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    old = {"budget": 24, "cases": [{"case": "tanker", "wall_s": 96.5},
+                                   {"case": "pipeline", "wall_s": 985.3},
+                                   {"case": "heavy", "wall_s": 431.3}]}
+    new = bench.merge(old, [{"case": "pipeline", "wall_s": 300.0}, {"case": "toy"}])
+    assert [(r["case"], r.get("wall_s")) for r in new["cases"]] == [
+        ("tanker", 96.5), ("pipeline", 300.0), ("heavy", 431.3), ("toy", None)]
+    assert new["budget"] == 24 and old["cases"][1]["wall_s"] == 985.3
