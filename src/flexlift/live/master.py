@@ -2,8 +2,15 @@
 :mod:`flexlift.control.controller` (the same compiled sample the simulation runs, no copy),
 fed each control period from the :class:`~flexlift.live.board.Board`.
 
-What the laws take, from what the bags report, through a Kalman filter per bag
-(:class:`~flexlift.live.track.BagTrack`; docs/reference/live.md#the-master-controller):
+Where every bag has a depth gauge and a load cell and the seabed is one holding group, the
+laws' heights, speeds and separation come from the hull observer
+(:class:`~flexlift.live.hull.HullTrack`: the plant's rigid modes driven by the load cells'
+forces, the seabed's hold law on the measured uplift; docs/reference/live.md#the-hull-observer)
+and each volume from a scalar filter of its load cell (:class:`~flexlift.live.hull.
+VolumeTrack`): with every sensor at 10 Hz the tanker is lifted safe
+(docs/reference/live.md#what-it-achieves). Otherwise, what the laws take, from what the bags
+report, through a Kalman filter per bag (:class:`~flexlift.live.track.BagTrack`;
+docs/reference/live.md#the-master-controller):
 
 - height z [m] above the bag point's rest level (the mean depth of its pressure gauge while
   held), and upward speed [m/s]: the filter's, predicted to the control sample;
