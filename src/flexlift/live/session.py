@@ -40,6 +40,10 @@ MAX_SLEEP_S = 0.05
 #: the rig run in this process has ended: the readings still on their way are read after
 #: this long of wall time [s]
 LAST_READINGS_S = 0.5
+#: the rig has ended: the readings still on their way are read until none has come for
+#: :data:`LAST_READINGS_S`, for at most this [s of wall time] (a loaded broker may hold
+#: the last seconds of a fast rig for longer than one wait)
+LAST_READINGS_MAX_S = 10.0
 
 
 class Outcome(NamedTuple):
@@ -214,11 +218,16 @@ class Live:
                        list(self.alarms.raised), self.stale_periods)
 
     def _last(self, until, stop) -> str:
-        """The rig has ended: the readings still on their way read (after
-        :data:`LAST_READINGS_S`), a last period, and the reason: ``arrived`` if every bag
-        then is at the target and arrival was awaited, else ``rig_ended``."""
-        stop.wait(LAST_READINGS_S)
-        self.read()
+        """The rig has ended: the readings still on their way read (until none has come for
+        :data:`LAST_READINGS_S`, at most :data:`LAST_READINGS_MAX_S`), a last period, and
+        the reason: ``arrived`` if every bag then is at the target and arrival was awaited,
+        else ``rig_ended``."""
+        deadline, count = time.monotonic() + LAST_READINGS_MAX_S, -1
+        while self.board.count != count and time.monotonic() < deadline:
+            count = self.board.count
+            if stop.wait(LAST_READINGS_S):
+                break
+            self.read()
         t = self.board.t_max  # the last reading's time: the lift's clock stopped with the rig
         if math.isfinite(t):
             self.period(t, time.monotonic())
