@@ -66,8 +66,7 @@ class Master:
         if self.hull is not None:
             return self._hull_inputs(board, t)
         for j, bag in enumerate(self.bags):
-            depth = board.last.get(f"{bag}/depth")
-            force = board.last.get(f"{bag}/sling_force")
+            depth, force = _gauge_and_cell(board, bag)
             if depth is None or force is None:
                 return False
             track = self.tracks[j]
@@ -85,8 +84,7 @@ class Master:
         hull = self.hull
         readings = []
         for bag in hull.names:
-            depth = board.last.get(f"{bag}/depth")
-            force = board.last.get(f"{bag}/sling_force")
+            depth, force = _gauge_and_cell(board, bag)
             if depth is None or force is None:
                 return False
             readings += [(t_d, 0, bag, d) for t_d, d in board.heights[bag]]
@@ -141,3 +139,9 @@ def reading_noise(scenario, quantity: str | None = None):
     spec = {q: getattr(section, q) or getattr(DEFAULT_FOR_LOG, q)
             for q in ("depth", "sling_force")}
     return spec["depth"].noise_si(), spec["sling_force"].noise_si()
+
+
+def _gauge_and_cell(board, bag: str):
+    """``bag``'s latest depth and sling-force readings on ``board``, each (time [s], value
+    [SI]) or None while none has come."""
+    return board.last.get(f"{bag}/depth"), board.last.get(f"{bag}/sling_force")

@@ -37,8 +37,8 @@ from flexlift.live.mqtt import QOS_COMMAND
 SEND_FILL_FRACTION, SEND_OPENING = 0.01, 0.01
 #: the longest sleep of the loop [s of wall time] (messages are read at least this often)
 MAX_SLEEP_S = 0.05
-#: the rig run in this process has ended: the readings still on their way are read after
-#: this long of wall time [s]
+#: the rig run in this process has ended: the readings still on their way are read until
+#: none has come for this long of wall time [s]
 LAST_READINGS_S = 0.5
 #: the rig has ended: the readings still on their way are read until none has come for
 #: :data:`LAST_READINGS_S`, for at most this [s of wall time] (a loaded broker may hold
