@@ -364,3 +364,16 @@ def test_the_lift_separated_first_when_its_dump_valves_opened_and_no_members(tan
     assert est.counts.released == int(released)
     est.assimilate(304.0, [])
     assert all(run.state.sep.all() for run in est.ensemble.runs) == released
+
+
+def test_a_blown_up_member_is_never_drawn_and_none_to_weigh_by_resamples_nothing(tanker):
+    """A member whose predictions are not numbers (its run blown up: the Grieg barge's
+    held members, widened, crashed filterpy's resampling) is never drawn; with no member
+    to weigh the others by nothing is resampled."""
+    ens = Ensemble(tanker, 4, seed=3, control="decentralized")
+    first = list(ens.runs)
+    assert not ens.resample(np.full(4, np.nan), np.random.default_rng(0), force=True)
+    assert ens.runs == first
+    assert ens.resample(np.array([np.nan, 0.0, -1.0, np.nan]), np.random.default_rng(0),
+                        force=True)
+    assert not any(run is first[0] or run is first[3] for run in ens.runs)

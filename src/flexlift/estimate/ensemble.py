@@ -163,6 +163,10 @@ class Ensemble:
         still held is drawn afresh from its prior truncated at the group's uplift now
         (:meth:`held_draw`: all a held lift's readings say of its hold is that it is
         above the uplift). Returns whether it resampled."""
+        # a member whose predictions are not numbers (its run blown up) is the least likely
+        log_weights = np.where(np.isfinite(log_weights), log_weights, -np.inf)
+        if not np.isfinite(log_weights).any():
+            return False  # no member to weigh the others by: nothing resampled
         w = np.exp(log_weights - log_weights.max())
         w /= w.sum()
         if 1.0 / np.sum(w**2) >= self.m / 2 and not force:

@@ -191,13 +191,16 @@ class Estimator:
         or, without dump-valve feedback, every member has ``lost`` the lift's motion and
         every held member's depth innovations ``rise`` [m] (readings, members) say the lift
         is above it (a depth less than predicted). Members already separated do not count:
-        the lift has separated whether or not one of them did with it."""
+        the lift has separated whether or not one of them did with it. (The motion's test
+        stands also where the dump valves say nothing: a lift whose controller does not
+        purge at separation.)"""
         held = np.array([not run.state.sep.any() for run in self.ensemble.runs])
         if not held.any():
             return False
         if f.size:
             f = f[:, held]
-            return bool(np.all(np.mean(f**2, axis=0) > OUTLIER**2) and np.all(f.mean(axis=0) > 0))
+            if np.all(np.mean(f**2, axis=0) > OUTLIER**2) and np.all(f.mean(axis=0) > 0):
+                return True
         return bool(lost.all() and rise.size and np.all(rise[:, held].mean(axis=0) < 0))
 
     def _widen(self, Y, z, sigma, motion) -> np.ndarray:
