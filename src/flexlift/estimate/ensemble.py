@@ -35,12 +35,15 @@ class Prior:
     """What is not known before the lift, as standard deviations about the scenario's
     values (assumed; docs/theory/estimation.md#prior): ``weight`` (only 0 for now: see
     :class:`Ensemble`) and ``holding`` relative [-], ``gas`` relative per bag [-], ``leak`` per bag [1/s] (a half-normal: no bag leaks
-    gas in, a leak never goes below 0)."""
+    gas in, a leak never goes below 0); and, during the lift, ``valve``: each valve's flow
+    off by this fraction of what it moved in a control period [-], drawn afresh each period
+    (the process noise of :func:`valve_noise`; 0: none)."""
 
     weight: float = 0.0
     holding: float = 0.25
     gas: float = 0.02
     leak: float = 1.0e-5
+    valve: float = 0.02
 
 
 class Ensemble:
@@ -93,6 +96,12 @@ class Ensemble:
         run = self.runs[0]
         self.sizes = {"q": run.state.q.size, "v": run.state.v.size, "n": run.state.n.size,
                       "H": run.state.H.size, "leak": run.switches.leak.size, "weight": 1}
+        #: each bag's least spread of gas that resampling leaves [m^3 at the bag's pressure]
+        #: (the estimator sets it: what one load-cell reading cannot tell apart); 0: none
+        self.gas_floor_m3 = np.zeros(run.state.n.size)
+        #: each member's valves' flows so far at the last :meth:`valve_noise` [m^3 at the
+        #: bag's pressure] (m, nb): filled, purged
+        self._flows = accounts(self.runs)
 
     @property
     def m(self) -> int:
@@ -129,6 +138,11 @@ class Ensemble:
     def advance(self, until: int) -> None:
         """Every member to step ``until`` (exclusive) together."""
         self.ended = advance_batch(self.runs, until, self.ended)
+
+    def valve_noise(self, spread: float, rng: np.random.Generator) -> None:
+        """Every member's gas moved by its valves' own inaccuracy since the last call
+        (:func:`valve_noise`)."""
+        self._flows = valve_noise(self.runs, self._flows, spread, rng)
 
     def columns(self) -> np.ndarray:
         """The members' columns (n, m) in the order of :data:`PARTS`."""
@@ -175,6 +189,11 @@ class Ensemble:
         spread = math.sqrt(1.0 - shrink**2)
         n = np.array([run.state.n for run in self.runs])  # (m, nb)
         kernels = {"weight": _kernel(self.weight, w), "n": _kernel(n, w)}
+        # weights on one member leave no spread to draw from: never less than the gas a
+        # load cell cannot tell apart (gas_floor_m3, as moles at the members' mean pressure)
+        p = np.mean([run.state.p for run in self.runs], axis=0)
+        floor = self.gas_floor_m3 * p / self.runs[0].records.bags.RT / spread
+        kernels["n"] = (kernels["n"][0], np.maximum(kernels["n"][1], floor))
         # (filterpy walks its cumulative sum past the end when rounding leaves it just
         # below 1: the weights are given a sum a hair above 1)
         chosen = _systematic(w * (1.0 + 1e-12), rng)
@@ -200,6 +219,7 @@ class Ensemble:
             runs.append(run)
             ended.append(self.ended[j])
         self.runs, self.weight, self.ended, self.hold_start = runs, weight, ended, hold_start
+        self._flows = accounts(self.runs)
         for i in range(self.m):
             self._set_weight(i)
         return True
@@ -250,6 +270,34 @@ class Ensemble:
             out[name] = column[k:k + self.sizes[name]]
             k += self.sizes[name]
         return out
+
+
+def accounts(runs: list[Ascent]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each run's valves' flows so far [m^3 at its bags' pressure] (m, nb), filled and
+    purged, and its step (m,): what :func:`valve_noise` measures the next flows from."""
+    return (np.array([run.state.gas_local for run in runs]),
+            np.array([run.state.purged for run in runs]),
+            np.array([int(run.state.counters[0]) for run in runs]))
+
+
+def valve_noise(runs: list[Ascent], since, spread: float, rng: np.random.Generator):
+    """Each run's gas moved by its valves' own inaccuracy since ``since`` (its
+    :func:`accounts` then): process noise (docs/theory/estimation.md#process-noise). A valve
+    is off by a fraction ``spread`` [-] of what it moved in each control period, drawn
+    afresh each period, so over an interval of K periods in which a bag's fill and purge moved
+    dV_fill and dV_purge the gas moves by spread p / (R T) sqrt((dV_fill^2 + dV_purge^2) / K)
+    e, e ~ N(0, 1), drawn per run and bag (a bag whose valves were shut is not moved; the
+    same variance whatever the interval). Returns the accounts now, for the next call."""
+    now = accounts(runs)
+    dV = np.hypot(now[0] - since[0], now[1] - since[1])  # (m, nb)
+    for i, run in enumerate(runs):
+        periods = (now[2][i] - since[2][i]) / run.settings.k_ctrl
+        if not dV[i].any() or periods <= 0.0:
+            continue
+        dn = spread * run.state.p * dV[i] / (run.records.bags.RT * math.sqrt(max(periods, 1.0)))
+        run.state.n[:] = np.maximum(run.state.n + dn * rng.standard_normal(dn.size), 0.0)
+        run.end_held_block()
+    return now
 
 
 def _uplift(run: Ascent, g: int) -> float:

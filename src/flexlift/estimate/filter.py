@@ -50,11 +50,12 @@ OUTLIER = 3.0
 LOST_SHARE = 0.5
 #: the most a lost ensemble's motion spread is widened by at one update [-]
 WIDEN_MAX = 2.0
-#: commanded members: each member's fill is the command times (1 + e), e ~ N(0, this) drawn
-#: per member and command [-]: the valve's own accuracy (its timing:
-#: :meth:`Estimator.command`'s ``delay_s``), process noise that keeps the members' gas spread
-#: from collapsing below what the load cells can tell
-FILL_SPREAD = 0.02
+#: a valve's own accuracy [-], process noise that keeps the members' gas spread from
+#: collapsing below what the load cells can tell: commanded members' fill is the command
+#: times (1 + e), e ~ N(0, this) drawn per member and command (its timing:
+#: :meth:`Estimator.command`'s ``delay_s``); every member's gas is moved by this fraction of
+#: what its fill and purge moved in each window (:meth:`Ensemble.valve_noise`)
+FILL_SPREAD = Prior().valve
 #: relaxation to the prior's perturbations (RTPP, Zhang et al. 2004): the members' anomalies
 #: after each update are this fraction theirs before it, the rest theirs after [-] (keeps the
 #: ensemble from collapsing; a convex mixture, so it never inflates what readings do not see)
@@ -117,8 +118,15 @@ class Estimator:
         self.valves = ({self.names[i]: j for j, i in enumerate(run.controllers.bags)}
                        if control == COMMANDED else {})
         self.by_name = {s.name: k for k, s in enumerate(sensors)}
+        rho_g = float(run.records.bags.rho_g)
+        for s in sensors:  # resampling leaves at least the gas a load cell cannot tell
+            if s.quantity == "sling_force" and s.bag in self.names:
+                self.ensemble.gas_floor_m3[self.names.index(s.bag)] = max(
+                    s.noise, NOISE_FLOOR["sling_force"]) / rho_g
         self.counts = Counts()
         self.rng = np.random.default_rng(seed + 1)
+        #: the valves' inaccuracy taken as process noise [-] (:attr:`Prior.valve`)
+        self.valve_spread = self.ensemble.prior.valve
         self.t = 0.0  # the time the members stand at [s]
         #: the last window's members had lost the lift (most of them off the motion readings,
         #: or widened): its predictions are not a fault detector's yardstick
@@ -134,6 +142,7 @@ class Estimator:
         self.t = t_end
         readings = [r for r in readings if r.sensor in self.by_name]
         if not readings:
+            ens.valve_noise(self.valve_spread, self.rng)
             return []
         Y = self._predicted(readings)
         noise = np.array([self.sensors[self.by_name[r.sensor]].noise for r in readings])
@@ -179,6 +188,7 @@ class Estimator:
             self._update(readings, quantity, Y, z, sigma, used)
             self.counts.updates += 1
         self._command(readings, quantity)
+        ens.valve_noise(self.valve_spread, self.rng)  # the window to come's process noise
         return [Prediction(r.time_s, r.sensor, r.value, float(mean[k]), float(std[k]),
                            bool(used[k])) for k, r in enumerate(readings)]
 
