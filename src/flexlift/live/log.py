@@ -27,6 +27,7 @@ CREATE TABLE IF NOT EXISTS commands (recv REAL, seq INTEGER, time REAL, bag TEXT
                                      valve TEXT, value REAL, sent INTEGER);
 CREATE TABLE IF NOT EXISTS alarms (recv REAL, time REAL, kind TEXT, source TEXT, text TEXT);
 CREATE TABLE IF NOT EXISTS dropped (recv REAL, reason TEXT, topic TEXT);
+CREATE TABLE IF NOT EXISTS periods (recv REAL, time REAL);
 """
 
 
@@ -68,6 +69,12 @@ class LiveLog:
     def dropped(self, recv: float, reason: str, topic: str) -> None:
         """Append a message dropped as malformed."""
         self._db.execute("INSERT INTO dropped VALUES (?, ?, ?)", (recv, reason, topic[:200]))
+        self._maybe_commit()
+
+    def period(self, recv: float, t: float) -> None:
+        """Append a control period begun at ``recv`` [POSIX s], the readings received until
+        then read, at lift time ``t`` [s] (how the period held; the readings each took)."""
+        self._db.execute("INSERT INTO periods VALUES (?, ?)", (recv, t))
         self._maybe_commit()
 
     def _maybe_commit(self) -> None:
@@ -112,8 +119,9 @@ def read_readings(path) -> Iterator[dict]:
 
 
 def read_table(path, table: str) -> list[tuple]:
-    """Every row of ``table`` (commands, alarms, dropped, meta) in the order written."""
-    if table not in ("commands", "alarms", "dropped", "meta", "readings"):
+    """Every row of ``table`` (commands, alarms, dropped, meta, readings, periods) in the
+    order written."""
+    if table not in ("commands", "alarms", "dropped", "meta", "readings", "periods"):
         raise ValueError(f"no table {table!r} in a live log")
     db = _connect(path)
     try:
