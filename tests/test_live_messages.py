@@ -94,6 +94,8 @@ def test_board_orders_by_time_and_marks_late_readings():
     assert board.value("bag_1", "depth") == 349.0
     assert board.speed("bag_1") == pytest.approx(1.0)  # depth falling 1 m/s: rising
     assert board.late == 1
+    board.add(Reading(2.5, "bag_1", "depth", 349.5), wall=1.5)  # a new depth: a new speed
+    assert board.speed("bag_1") == pytest.approx(3 / 7)  # the slope of the three
 
 
 def test_board_silent_after_twice_the_period():
