@@ -82,3 +82,21 @@ def test_the_speed_follows_the_buoyancy_at_once(plant):
             speed = float(hull.shape[0] @ truth[2:4])
     assert speed > 0.01, "the step moved the hull"
     assert max(abs(e) for e in errors) < 0.002, errors
+
+
+def test_the_rise_test_weighs_only_the_last_window(plant):
+    """Held, noise-free gauges: every bag 0.015 m up for 3 s (below MIN_RISE_M: no
+    separation), back down for 10 s (the bump has left the window: still none), then 0.05 m
+    up: separated by the rise within the window."""
+    from flexlift.live.hull import RISE_WINDOW_S
+
+    hull = HullTrack(plant, DEPTH_SD, PITCH_SD, FORCE_SD)
+    told, k = None, 0
+    for span, rise in ((2.0, 0.0), (3.0, 0.015), (10.0, 0.0), (3.0, 0.05)):
+        for _ in range(int(span * 10)):
+            t, k = 0.1 * k, k + 1
+            for b in plant.names:
+                hull.depth(b, t, DEPTH0 - rise)
+            if hull.separated and told is None:
+                told = t
+    assert hull.how == "rise" and 15.0 < told <= 15.0 + RISE_WINDOW_S, told

@@ -94,6 +94,8 @@ def test_board_orders_by_time_and_marks_late_readings():
     assert board.value("bag_1", "depth") == 349.0
     assert board.speed("bag_1") == pytest.approx(1.0)  # depth falling 1 m/s: rising
     assert board.late == 1
+    board.add(Reading(2.5, "bag_1", "depth", 349.5), wall=1.5)  # a new depth: a new speed
+    assert board.speed("bag_1") == pytest.approx(3 / 7)  # the slope of the three
 
 
 def test_board_silent_after_twice_the_period():
@@ -148,3 +150,22 @@ os.kill(os.getpid(), signal.SIGKILL)
     with sqlite3.connect(path) as db:
         assert db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
     assert not math.isnan(rows[-1]["value"])
+
+
+def test_each_control_period_is_logged_with_its_start_and_lift_time(tmp_path, tanker):
+    """live logs every control period it runs (its start on this machine's clock, after the
+    readings received until then were read, and its lift time): how the period held."""
+    import time
+
+    from flexlift.live.session import Live
+
+    log = livelog.LiveLog(tmp_path / "live.sqlite")
+    live = Live(tanker, None, log, "tk", "advise", say=lambda line: None)
+    before = time.time()
+    for k in range(3):
+        live.period(0.1 * k, time.monotonic())
+    log.close()
+    rows = livelog.read_table(tmp_path / "live.sqlite", "periods")
+    assert [t for _, t in rows] == pytest.approx([0.0, 0.1, 0.2])
+    starts = [recv for recv, _ in rows]
+    assert before <= starts[0] <= starts[1] <= starts[2] <= time.time()

@@ -159,6 +159,7 @@ class Live:
 
     def period(self, t: float, wall: float) -> None:
         """One control period at lift time ``t``."""
+        self.log.period(time.time(), t)
         silent = self.board.silent(wall)
         if not self._stale(t, silent):
             wanted = self.master.step(t, self.board)
