@@ -173,14 +173,51 @@ def test_no_plan_on_a_wreck_no_bag_can_lift(tmp_path, capsys):
     assert s["no_plan"]["what_would_change_it"] and s["no_plan"]["best_candidates"]
 
 
-@pytest.mark.parametrize("extra", [["--target", "0"], ["--target", "1.5"], ["--budget", "0"],
+def test_no_plan_from_the_whole_catalogue(tmp_path, capsys):
+    """The same wreck offered every catalogue bag of the designer's default (none kept as
+    published): still no plan, every candidate stopped at its statics, and the answer asks
+    for a larger bag or a longer span."""
+    from flexlift.scenario import catalogue
+
+    heavy = tmp_path / "heavy.yaml"
+    heavy.write_text(Path(TOY).read_text().replace("displacement_t: 40.0",
+                                                   "displacement_t: 1000.0"))
+    code = main(["design", str(heavy), "--up-to", "statics", "--budget", "24", "--out",
+                 str(tmp_path / "o"), "--json", "--no-compare"])
+    s = json.loads(capsys.readouterr().out)
+    offered = [n for n, e in catalogue.builtin().items() if not e.get("as_published")]
+    assert s["space"]["models"] == offered and len(offered) > 10
+    assert code == 1 and not s["found"] and s["no_plan"]["rejected_at"] == {"statics": 24}
+    assert any("larger catalogue bag" in w for w in s["no_plan"]["what_would_change_it"])
+
+
+@pytest.mark.parametrize("extra", [["--target", "0"], ["--target", "1"], ["--target", "1.5"],
+                                   ["--budget", "0"],
                                    ["--bags", "no_such_bag"], ["--points", "5..2"],
                                    ["--span", "20,10"], ["--objectives", "cost"],
-                                   ["--bags", ","]])
+                                   ["--bags", ","], ["--count", "3", "--over", "2..4"],
+                                   ["--modes", "coordinated,nosuch"], ["--speeds", "0"],
+                                   ["--pulls", "auto,-5"], ["--dump-valve", "1,0"],
+                                   ["--samples", "0"], ["--workers", "0"]])
 def test_bad_input_exit_2(extra, tmp_path, capsys):
+    """Refused in one line naming the option, before any candidate (no folder): before, an
+    unknown mode, a speed, pull or dump valve out of range was found out by every candidate's
+    statics (exit 1, "no plan"), and --over beside a fixed --count was ignored."""
     code = main(["design", TOY, "--out", str(tmp_path / "o"), "--up-to", "statics", *extra])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "error" in err
+    assert any(w in err for w in extra if w.startswith("--")) or "bag catalogue" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_empty_catalogue_file_is_refused(tmp_path, capsys):
+    (tmp_path / "bags.yaml").write_text("bags: {}\n")
+    scen = tmp_path / "toy.yaml"
+    scen.write_text(Path(TOY).read_text().replace(
+        "lift:\n", f"lift:\n  catalogue_file: {tmp_path / 'bags.yaml'}\n", 1))
+    code = main(["design", str(scen), "--out", str(tmp_path / "o"), "--up-to", "statics"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "bag catalogue" in err
     assert not (tmp_path / "o").exists()
 
 

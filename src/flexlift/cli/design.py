@@ -133,6 +133,8 @@ def _main(args: argparse.Namespace) -> int:
     from flexlift.sweep.executors import make_engine
 
     scenario = scenario_from(args)
+    if args.workers is not None and args.workers < 1:
+        raise InputError("--workers", args.workers, "at least 1 local process")
     if args.span is not None and len(args.span) != 2:
         raise InputError("--span", ",".join(map(str, args.span)), "two numbers FROM,TO [m]")
     space = make_space(scenario, models=args.bags, points=args.points, over=args.over,

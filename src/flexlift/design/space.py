@@ -150,6 +150,9 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
     c = scenario.control
     if count is not None and not 1 <= int(count):
         raise InputError("--count", count, "a whole number of bags per point, at least 1")
+    if count is not None and over is not None:  # points x count fixes the bags: over is moot
+        raise InputError("--over", f"{over[0]}..{over[1]}", f"--count {count} fixes the bags "
+                         "(lift points x count): give --count or --over, not both")
     own = len(scenario.lift.bags or [])  # the user's own plan's lift points
     space = Space(models=models, points=_pair(points, (1, max(12, 2 * own)), "--points"),
                   over=_pair(over, (0, 12), "--over", low=0),
@@ -170,7 +173,29 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
                          ("--dump-valve", space.dump_valve_factors)):
         if not values:
             raise InputError(name, "", "give at least one value")
+    _check_choices(scenario, space)
     return space
+
+
+def _check_choices(scenario, space: Space) -> None:
+    """Each control choice applied alone to the scenario, so that a value no candidate could
+    take (an unknown mode, a speed or pull out of range) is refused here, in one line, not
+    found out by every candidate's statics; a dump-valve factor must be positive."""
+    for name, key, values in (("--modes", "control.mode", space.modes),
+                              ("--speeds", "control.ascent_speed_m_s", space.ascent_speeds),
+                              ("--pulls", "control.breakout_pull_t", space.breakout_pulls)):
+        for v in values:
+            if v is None:
+                continue
+            try:
+                scenario.with_changes(**{key: v})
+            except InputError as exc:
+                parts = str(exc).split(": ", 2)  # "<source>: <key> = <value>: <allowed>"
+                raise InputError(name, v, f"{key}: {parts[-1]}") from None
+    for f in space.dump_valve_factors:
+        if not (isinstance(f, (int, float)) and 0.0 < f <= 100.0):
+            raise InputError("--dump-valve", f, "a factor on the catalogue bag's dump-valve "
+                             "capacity, 0 < factor <= 100")
 
 
 def _internal(scenario, value, entries) -> tuple[int, int]:
