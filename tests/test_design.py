@@ -152,6 +152,11 @@ def test_plan_yaml_runs_unchanged(toy, tmp_path):
     assert len(res.criteria) > 0
     spec = parse_spec({"base": str(path), "study": "salvage", "monte_carlo": {"samples": 3}})
     assert spec.n_cases == 3
+    from flexlift.sweep.contingency.run import plan_study  # what `flexlift contingency` plans
+
+    _, _, cases, _, _, _ = plan_study(plan, yes=True)
+    hit = {str(c.bag).split("_")[0] for c in cases if c.bag}  # a cluster's bag: p2_1
+    assert hit >= {b.name for b in plan.lift.bags if b.kind == "external"}, sorted(hit)
     head = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert set(head) >= {"best", "pareto", "lower_bound", "evaluations", "elapsed_s"}
     assert (tmp_path / "out" / "candidates.csv").read_text().count("\n") == 13
