@@ -270,3 +270,34 @@ def test_a_pipelines_candidates_are_scenarios_and_its_points_reach_its_own(tmp_p
     assert code == 0 and s["found"], s["no_plan"]
     rows = (tmp_path / "o" / "candidates.csv").read_text()
     assert "place the bags; give one" not in rows
+
+
+def test_the_report_leads_with_the_proposal_and_says_how_to_rig_it(toy, tmp_path):
+    """report.html: the decision, then the proposal beside the user's plan, then where to
+    rig it (every lift point's position and bags, as in plan.yaml) with its static margins
+    (by hand: 5 t bags, one lost), the rejected neighbours with their reasons, the design
+    basis; summary.json carries the basis and the margins."""
+    space = make_space(toy, models=["open_parachute_5t"], points=(2, 4), over=(0, 3))
+    s = run_design(toy, space, Options(budget=12, population=12, up_to="statics"),
+                   tmp_path / "out")
+    page = (tmp_path / "out" / "report.html").read_text()
+    b = s["best"]
+    order = [page.index(f"Rig {b['bags']} x open_parachute_5t"), page.index("your plan"),
+             page.index("The plan to rig"), page.index("Lower bound"),
+             page.index("Design basis"), page.index("Evaluations")]
+    assert order == sorted(order)
+    assert b["rated_lift_t"] == 5.0 * b["bags"]
+    assert b["rated_lift_after_losing_one_t"] == 5.0 * (b["bags"] - 1) >= REQUIRED_T
+    assert f"{b['rated_lift_after_losing_one_t']:,.0f} t" in page
+    assert 0 < b["utilisation"] <= 1 and f"{b['utilisation']:.2f}" in page
+    plan = load_scenario(tmp_path / "out" / "plan.yaml")
+    for bag in (x for x in plan.lift.bags if x.kind == "external"):
+        assert f"<td>{bag.x_m:.2f}</td><td>{bag.count}</td>" in page
+    assert s["own_plan"]["bags"] > 0 and s["compared"]
+    assert "breakout factor" in page and any(
+        r["item"].startswith("breakout factor") for r in s["design_basis"])
+    for n in s["nearby"]:
+        assert n["why"] and n["why"].replace("'", "&#x27;") in page
+    s = run_design(toy, space, Options(budget=12, population=12, up_to="statics"),
+                   tmp_path / "again", compare=False)
+    assert "not run: --no-compare" in (tmp_path / "again" / "report.html").read_text()

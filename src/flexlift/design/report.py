@@ -2,8 +2,10 @@
 for a search that found no plan (docs/guide/design.md).
 
 The report leads with the decision: the proposal beside the user's own plan (bags, single
-failures, P(unsafe)), then the lower bound, the Pareto front, why each nearby alternative was
-rejected (the rung, the check, the failure and its margin) and the evaluations by rung.
+failures, P(unsafe)), the plan to rig (each lift point's position and bags, the control and
+equipment, the static margins), then the lower bound, the Pareto front, why each nearby alternative was
+rejected (the rung, the check, the failure and its margin), the design basis the proposal
+was checked by, and the evaluations by rung.
 """
 
 from __future__ import annotations
@@ -175,13 +177,78 @@ def _decision(summary: dict) -> str:
                            "</p>" if summary.get("not_assessed") else ""))
 
 
+def _rigging(summary: dict) -> str:
+    """The proposal as a salvor rigs it: each lift point's position, bags and model, the
+    internal bags, the control and equipment choices, and the static margins."""
+    b, lb = summary["best"], summary["lower_bound"]
+    if b is None:
+        return ""
+    rows = [_row(["lift point", "x [m] from aft", "bags", "catalogue bag"], True)]
+    rows += [_row([f"p{j + 1}", f"{p['x_m']:.2f}", p["count"], p["model"]])
+             for j, p in enumerate(b["points"])]
+    if b.get("internal"):
+        rows.append(_row(["internal", "in the ballast tanks", b["internal"], b["types"][0]]))
+    supply = b.get("supply_free_air_m3_min")
+    pull = b.get("breakout_pull_t")
+    items = [("control mode", b["mode"]),
+             ("planned ascent speed", f"{b['ascent_speed_m_s']:g} m/s"),
+             ("breakout pull", "the default share" if pull is None else f"{pull:g} t"),
+             ("dump valve", f"{b['dump_valve_factor']:g} x the catalogue bag's"),
+             ("compressor supply", "the scenario's" if supply is None
+              else f"{supply:g} m3/min free air"),
+             ("staging", {"own": "the scenario's own", "none": "every bag at once"}.get(
+                 b.get("sequence") or "own", b.get("sequence")))]
+    margins = []
+    if b.get("rated_lift_t") is not None:
+        req = lb["required_lift_t"]
+        margins.append(f"rated lift {b['rated_lift_t']:,.0f} t against the required "
+                       f"{req:,.0f} t ({b['rated_lift_t'] / req:.3f} x); after losing the "
+                       f"largest bag {b['rated_lift_after_losing_one_t']:,.0f} t "
+                       f"({b['rated_lift_after_losing_one_t'] / req:.3f} x)")
+    if b.get("utilisation") is not None:
+        margins.append(f"largest hull girder bending utilisation in the design cases "
+                       f"{b['utilisation']:.2f} (at most 1)")
+    if b.get("contingency_cases"):
+        margins.append(f"single failures: {_counts(b['contingency'])} of "
+                       f"{b['contingency_cases']} cases")
+    if b.get("salvage_counts"):
+        margins.append("salvage study: " + _counts(b["salvage_counts"]))
+    return ("<h2>The plan to rig</h2><p>As written to plan.yaml (the scenario every command "
+            "takes unchanged).</p><table>" + "".join(rows) + "</table><ul>"
+            + "".join(f"<li>{html.escape(k)}: {html.escape(str(v))}</li>" for k, v in items)
+            + "</ul><p>Margins:</p><ul>"
+            + "".join(f"<li>{html.escape(m)}</li>" for m in margins) + "</ul>")
+
+
+def _basis(summary: dict) -> str:
+    rows = summary.get("design_basis") or []
+    if not rows:
+        return ""
+    judged = "the proposal" if summary["best"] else "your plan"
+    return (f"<h2>Design basis</h2><p>The factors, limits and their sources {judged} was "
+            "checked by.</p><table>" + _row(["item", "value", "source", "note"], True)
+            + "".join(_row([r["item"], r["value"], r["source"], r.get("note", "")])
+                      for r in rows) + "</table>")
+
+
+def _own_statics(own: dict) -> str:
+    st = own.get("statics") or {}
+    if st.get("passed", True):
+        return "passed"
+    return f"failed: {st.get('check')} ({st.get('why', '')})"
+
+
 def _side_by_side(summary: dict) -> str:
     own, b = summary.get("own_plan"), summary["best"]
-    rows = [_row(["", "your plan", "proposal"], True)]
+    if own is None:
+        head = "your plan (not run: --no-compare)"
+    else:
+        head = "your plan"
+    rows = [_row(["", head, "proposal"], True)]
     o = own or {}
     rows.append(_row(["bags", o.get("bags", "-"), b["bags"] if b else "-"]))
-    rows.append(_row(["static checks", (o.get("statics") or {}).get("check") or "passed"
-                      if own else "-", "passed" if b else "-"]))
+    rows.append(_row(["static checks", _own_statics(own) if own else "-",
+                      "passed" if b else "-"]))
     rows.append(_row(["nominal ascent", (o.get("nominal") or {}).get("outcome", "-"),
                       "safe" if b else "-"]))
     rows.append(_row(["single failures", _counts((o.get("contingency") or {}).get("counts")),
@@ -196,7 +263,7 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
     write_bytes(folder / "pareto.png", _figure(summary, rows))
     lb, ev = summary["lower_bound"], summary["evaluations"]
     parts = [f"<h1>flexlift design: {html.escape(summary['scenario'])}</h1>",
-             _decision(summary), _side_by_side(summary),
+             _decision(summary), _side_by_side(summary), _rigging(summary),
              f"<h2>Lower bound</h2><p>{html.escape(lb['model'])}: the required "
              f"{lb['required_lift_t']:,.0f} t needs N = {lb['n']} bags; still lifting after "
              f"losing any one, N-1 = {lb['n_minus_1']}.</p>",
@@ -220,6 +287,7 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
         parts.append("<h2>No plan: what would change it</h2><ul>" + "".join(
             f"<li>{html.escape(h)}</li>" for h in np_["what_would_change_it"]) + "</ul>"
             + (f"<p>What broke, by candidates:</p><ul>{broke}</ul>" if broke else ""))
+    parts.append(_basis(summary))
     parts.append(f"<h2>Evaluations</h2><p>{ev['candidates']} candidates ({ev['distinct']} "
                  "distinct); reached each rung: " + ", ".join(
                      f"{RUNG_TEXT[k]} {v}" for k, v in ev["reached"].items())
