@@ -103,9 +103,14 @@ def no_plan(rows: list[dict], space) -> dict:
         hints.append(hint)
     if where.get("contingency"):
         kinds = ", ".join(f"{k}: {v}" for k, v in broke["contingency"].items())
-        hints.append(f"some single failure was unsafe for every plan tried ({kinds}); a second "
-                     "supply (--supply) or a larger dump valve (--dump-valve), or more bags "
-                     "(--over)")
+        hint = (f"a single failure stopped each of the {where['contingency']} candidates that "
+                f"reached them ({kinds})")
+        if any("(incomplete)" in k for k in broke["contingency"]):
+            hint += ("; incomplete: the run ended before the lift finished after the loss (it "
+                     "never separated, or its hold was cut short): a larger breakout pull "
+                     "(--pulls) or more bags (--over), or a longer simulation.duration_s")
+        hint += _searched(space)
+        hints.append(hint)
     if where.get("salvage"):
         hints.append("a slower planned ascent (--speeds) or more margin (--over): the salvage "
                      "study's P(unsafe) bound stays above the target")
@@ -113,6 +118,39 @@ def no_plan(rows: list[dict], space) -> dict:
             "criteria": broke,
             "what_would_change_it": hints or ["a wider search (--budget, --over, --points)"],
             "best_candidates": climbed(rows, 5)}
+
+
+def _searched(space) -> str:
+    """What the space left fixed (each one a change to try: its option) and what it already
+    varied without a plan (not to be asked for again)."""
+    untried, tried = [], []
+    models = tuple(getattr(space, "models", ()))
+    if len(models) == 1:
+        untried.append(f"another bag than {models[0]} (--bags)")
+    elif models:
+        tried.append(f"{len(models)} catalogue bags")
+    supplies = tuple(getattr(space, "supplies", (None,)))
+    (tried if len(supplies) > 1 else untried).append(
+        "compressor supplies " + ", ".join("auto" if v is None else f"{v:g}" for v in supplies)
+        if len(supplies) > 1 else "a second or larger supply (--supply)")
+    dump = tuple(getattr(space, "dump_valve_factors", (1.0,)))
+    if max(dump) > 1.0:
+        tried.append(f"dump valves up to {max(dump):g} x")
+    else:
+        untried.append("a larger dump valve (--dump-valve)")
+    for attr, opt, what in (("modes", "--modes", "control modes"),
+                            ("breakout_pulls", "--pulls", "breakout pulls"),
+                            ("ascent_speeds", "--speeds", "planned ascent speeds")):
+        vals = tuple(getattr(space, attr, ()))
+        if len(vals) > 1:
+            tried.append(f"{what} " + ", ".join("auto" if v is None else f"{v}" for v in vals))
+        elif vals:
+            untried.append(f"other {what} ({opt})")
+    over = getattr(space, "over", None)
+    if over is not None:
+        untried.append(f"more bags than the fewest that lift + {over[1]} (--over)")
+    out = "; not searched: " + ", ".join(untried) if untried else ""
+    return out + ("; searched without a plan: " + ", ".join(tried) if tried else "")
 
 
 def _figure(summary: dict, rows: list[dict]) -> bytes:
