@@ -144,3 +144,16 @@ def test_a_single_failure_hint_asks_only_for_what_was_not_searched(pipe):
     assert "--dump-valve" not in hint and "--modes" not in hint
     assert "searched without a plan: " in hint and "dump valves up to 4 x" in hint
     assert "another bag than enclosed_10t (--bags)" in hint
+
+
+def test_a_nominal_hint_does_not_ask_for_speeds_or_valves_already_searched(pipe):
+    rows = [_row(30, "nominal", "ascent velocity: p8 rose faster")]
+    fixed = " ".join(report.no_plan(rows, make_space(pipe, models=["enclosed_10t"]))
+                     ["what_would_change_it"])
+    assert "(--speeds)" in fixed and "(--dump-valve)" in fixed
+    wide = " ".join(report.no_plan(rows, make_space(pipe, models=["enclosed_10t"],
+                                                    speeds=[0.1, 0.2],
+                                                    dump_factors=[1.0, 2.0]))
+                    ["what_would_change_it"])
+    assert "(--speeds)" not in wide and "(--dump-valve)" not in wide
+    assert "searched did not stop it" in wide

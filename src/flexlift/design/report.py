@@ -98,8 +98,15 @@ def no_plan(rows: list[dict], space) -> dict:
                 f"reached it (criteria broken, by candidates: {named})")
         if getattr(space, "staged", False) and tuple(space.sequences) == ("own",):
             hint += "; on a staged lift, every bag at once (--sequence own,none)"
-        hint += ("; a slower planned ascent (--speeds) or a larger dump valve (--dump-valve) "
-                 "against a runaway ascent")
+        speeds = tuple(getattr(space, "ascent_speeds", ()))
+        dump = tuple(getattr(space, "dump_valve_factors", (1.0,)))
+        ask = ([] if len(speeds) > 1 else ["a slower planned ascent (--speeds)"]) + (
+            [] if dump and max(dump) > 1.0 else ["a larger dump valve (--dump-valve)"])
+        if ask:
+            hint += "; " + " or ".join(ask) + " against a runaway ascent"
+        else:
+            hint += ("; the planned ascent speeds and dump valves searched did not stop it "
+                     "(see below)")
         hints.append(hint)
     if where.get("contingency"):
         kinds = ", ".join(f"{k}: {v}" for k, v in broke["contingency"].items())
