@@ -298,6 +298,18 @@ def test_the_report_leads_with_the_proposal_and_says_how_to_rig_it(toy, tmp_path
         r["item"].startswith("breakout factor") for r in s["design_basis"])
     for n in s["nearby"]:
         assert n["why"] and n["why"].replace("'", "&#x27;") in page
+    # the scenario's own supply is per bag: said beside the bag count it is multiplied by
+    assert f"for each of the {b['bags']} bags" in page
     s = run_design(toy, space, Options(budget=12, population=12, up_to="statics"),
                    tmp_path / "again", compare=False)
     assert "not run: --no-compare" in (tmp_path / "again" / "report.html").read_text()
+
+
+def test_a_bound_just_under_the_target_is_not_shown_as_the_target():
+    """P(unsafe) in per cent to two decimals: 0 of 400 cases, its bound 0.95 % (the report
+    showed 0.010, the 1 % target, before)."""
+    from flexlift.design import report
+
+    p = {"p": 0.0, "low": 0.0, "high": 0.00948, "n": 400}
+    assert report._p(p) == "0.00 % (95 %: 0.00-0.95 %, n = 400)"
+    assert report._p(None) == "not run"

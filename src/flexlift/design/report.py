@@ -197,15 +197,29 @@ def _row(cells, head=False) -> str:
 
 
 def _p(p: dict | None) -> str:
+    """P(unsafe) and its 95 % interval in per cent, to two decimals (a bound of 0.95 % is
+    not shown as the 1 % target it meets)."""
     if not p or p.get("p") is None:
         return "not run"
-    return f"{p['p']:.3f} ({p['low']:.3f}-{p['high']:.3f}, n = {p['n']})"
+    return (f"{100 * p['p']:.2f} % (95 %: {100 * p['low']:.2f}-{100 * p['high']:.2f} %, "
+            f"n = {p['n']})")
 
 
 def _counts(c: dict | None) -> str:
     if not c:
         return "not run"
-    return ", ".join(f"{v} {k}" for k, v in c.items() if v)
+    return ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in c.items() if v)
+
+
+def _supply(summary: dict) -> str:
+    """The scenario's own gas supply in the words of the design basis (per bag, and what it
+    assumes), so that a proposal of many bags shows what it takes for granted."""
+    row = next((r for r in summary.get("design_basis") or []
+                if r["item"].startswith("gas supply")), None)
+    if row is None:
+        return "the scenario's"
+    note = f"; {row['note']}" if row.get("note") else ""
+    return f"the scenario's: {row['value']}{note}, for each of the {summary['best']['bags']} bags"
 
 
 def _decision(summary: dict) -> str:
@@ -239,8 +253,8 @@ def _rigging(summary: dict) -> str:
              ("planned ascent speed", f"{b['ascent_speed_m_s']:g} m/s"),
              ("breakout pull", "the default share" if pull is None else f"{pull:g} t"),
              ("dump valve", f"{b['dump_valve_factor']:g} x the catalogue bag's"),
-             ("compressor supply", "the scenario's" if supply is None
-              else f"{supply:g} m3/min free air"),
+             ("compressor supply", _supply(summary) if supply is None
+              else f"{supply:g} m3/min free air, shared by the bags"),
              ("staging", {"own": "the scenario's own", "none": "every bag at once"}.get(
                  b.get("sequence") or "own", b.get("sequence")))]
     margins = []
@@ -315,7 +329,9 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
              "<h2>Pareto front</h2><img src='pareto.png' alt='bags and gas of every "
              "candidate'>",
              "<table>" + _row(["bags", "model", "gas m3", "cost", "P(unsafe)"], True)
-             + "".join(_row([p["bags"], " + ".join(p["types"]), p["gas_m3"], p["cost"],
+             + "".join(_row([p["bags"], " + ".join(p["types"]),
+                             "-" if p["gas_m3"] is None else f"{p['gas_m3']:,.0f}",
+                             "-" if p["cost"] is None else f"{p['cost']:,.0f}",
                              _p(p["p_unsafe"])]) for p in summary["pareto"]) + "</table>",
              "<h2>" + ("Why the nearby alternatives were rejected" if summary["best"] else
                        "The candidates that climbed highest, and why each was rejected")
