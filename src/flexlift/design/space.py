@@ -196,6 +196,13 @@ def _check_choices(scenario, space: Space) -> None:
         if not (isinstance(f, (int, float)) and 0.0 < f <= 100.0):
             raise InputError("--dump-valve", f, "a factor on the catalogue bag's dump-valve "
                              "capacity, 0 < factor <= 100")
+    from flexlift.scenario.valves import purge_given
+
+    if any(f != 1.0 for f in space.dump_valve_factors) and purge_given(scenario):
+        # the scenario's own valve replaces every catalogue bag's: a factor would change nothing
+        raise InputError("--dump-valve", ",".join(f"{f:g}" for f in space.dump_valve_factors),
+                         "the scenario gives gas.purge_rate_max_m3_s, which replaces the "
+                         "catalogue bag's dump valve: change that key instead")
 
 
 def _internal(scenario, value, entries) -> tuple[int, int]:
@@ -287,7 +294,7 @@ def positions(hull, scenario, counts: list[int], span: tuple[float, float],
     return out
 
 
-def catalogue_bag(candidate: Candidate, space: Space) -> dict:
+def catalogue_bag(candidate: Candidate, space: Space, scenario=None) -> dict:
     """``lift.catalogue_bag`` of ``candidate``: its bag's entry (with per-point types the
     envelope of the points' bags, :func:`flexlift.design.mixed.envelope`), its dump valve
     scaled by the candidate's factor."""
@@ -301,6 +308,11 @@ def catalogue_bag(candidate: Candidate, space: Space) -> dict:
     bag["model"] = candidate.model
     if bag.get("dump_valve_m3_s") is not None:
         bag["dump_valve_m3_s"] = float(bag["dump_valve_m3_s"]) * candidate.dump_valve_factor
+    elif candidate.dump_valve_factor != 1.0 and scenario is not None:
+        # an entry without a valve (the paper's cylinder) purges through the scenario's
+        # gas.purge_rate_max_m3_s: the factor is on that valve, the external bags' own
+        bag["dump_valve_m3_s"] = (float(scenario.gas.purge_rate_max_m3_s)
+                                  * candidate.dump_valve_factor)
     return bag
 
 
@@ -315,7 +327,8 @@ def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dic
     bags = [{"name": f"p{j + 1}", "kind": "external", "x_m": round(x, 4), "count": n,
              "lift_t": float(space.entries[m]["lift_t"])}
             for j, (x, n, m) in enumerate(zip(xs, counts, candidate.models()))]
-    out = {"lift.catalogue_bag": catalogue_bag(candidate, space), "lift.bags": bags + inner,
+    out = {"lift.catalogue_bag": catalogue_bag(candidate, space, scenario),
+           "lift.bags": bags + inner,
            "lift.internal_bags": candidate.internal, "lift.bag_lift_t": None,
            "control.mode": candidate.mode,
            "control.ascent_speed_m_s": candidate.ascent_speed_m_s,
