@@ -152,6 +152,11 @@ def test_plan_yaml_runs_unchanged(toy, tmp_path):
     assert len(res.criteria) > 0
     spec = parse_spec({"base": str(path), "study": "salvage", "monte_carlo": {"samples": 3}})
     assert spec.n_cases == 3
+    from flexlift.sweep.contingency.run import plan_study  # what `flexlift contingency` plans
+
+    _, _, cases, _, _, _ = plan_study(plan, yes=True)
+    hit = {str(c.bag).split("_")[0] for c in cases if c.bag}  # a cluster's bag: p2_1
+    assert hit >= {b.name for b in plan.lift.bags if b.kind == "external"}, sorted(hit)
     head = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert set(head) >= {"best", "pareto", "lower_bound", "evaluations", "elapsed_s"}
     assert (tmp_path / "out" / "candidates.csv").read_text().count("\n") == 13
@@ -173,14 +178,51 @@ def test_no_plan_on_a_wreck_no_bag_can_lift(tmp_path, capsys):
     assert s["no_plan"]["what_would_change_it"] and s["no_plan"]["best_candidates"]
 
 
-@pytest.mark.parametrize("extra", [["--target", "0"], ["--target", "1.5"], ["--budget", "0"],
+def test_no_plan_from_the_whole_catalogue(tmp_path, capsys):
+    """The same wreck offered every catalogue bag of the designer's default (none kept as
+    published): still no plan, every candidate stopped at its statics, and the answer asks
+    for a larger bag or a longer span."""
+    from flexlift.scenario import catalogue
+
+    heavy = tmp_path / "heavy.yaml"
+    heavy.write_text(Path(TOY).read_text().replace("displacement_t: 40.0",
+                                                   "displacement_t: 1000.0"))
+    code = main(["design", str(heavy), "--up-to", "statics", "--budget", "24", "--out",
+                 str(tmp_path / "o"), "--json", "--no-compare"])
+    s = json.loads(capsys.readouterr().out)
+    offered = [n for n, e in catalogue.builtin().items() if not e.get("as_published")]
+    assert s["space"]["models"] == offered and len(offered) > 10
+    assert code == 1 and not s["found"] and s["no_plan"]["rejected_at"] == {"statics": 24}
+    assert any("larger catalogue bag" in w for w in s["no_plan"]["what_would_change_it"])
+
+
+@pytest.mark.parametrize("extra", [["--target", "0"], ["--target", "1"], ["--target", "1.5"],
+                                   ["--budget", "0"],
                                    ["--bags", "no_such_bag"], ["--points", "5..2"],
                                    ["--span", "20,10"], ["--objectives", "cost"],
-                                   ["--bags", ","]])
+                                   ["--bags", ","], ["--count", "3", "--over", "2..4"],
+                                   ["--modes", "coordinated,nosuch"], ["--speeds", "0"],
+                                   ["--pulls", "auto,-5"], ["--dump-valve", "1,0"],
+                                   ["--samples", "0"], ["--workers", "0"]])
 def test_bad_input_exit_2(extra, tmp_path, capsys):
+    """Refused in one line naming the option, before any candidate (no folder): before, an
+    unknown mode, a speed, pull or dump valve out of range was found out by every candidate's
+    statics (exit 1, "no plan"), and --over beside a fixed --count was ignored."""
     code = main(["design", TOY, "--out", str(tmp_path / "o"), "--up-to", "statics", *extra])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "error" in err
+    assert any(w in err for w in extra if w.startswith("--")) or "bag catalogue" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_empty_catalogue_file_is_refused(tmp_path, capsys):
+    (tmp_path / "bags.yaml").write_text("bags: {}\n")
+    scen = tmp_path / "toy.yaml"
+    scen.write_text(Path(TOY).read_text().replace(
+        "lift:\n", f"lift:\n  catalogue_file: {tmp_path / 'bags.yaml'}\n", 1))
+    code = main(["design", str(scen), "--out", str(tmp_path / "o"), "--up-to", "statics"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "bag catalogue" in err
     assert not (tmp_path / "o").exists()
 
 
@@ -228,3 +270,46 @@ def test_a_pipelines_candidates_are_scenarios_and_its_points_reach_its_own(tmp_p
     assert code == 0 and s["found"], s["no_plan"]
     rows = (tmp_path / "o" / "candidates.csv").read_text()
     assert "place the bags; give one" not in rows
+
+
+def test_the_report_leads_with_the_proposal_and_says_how_to_rig_it(toy, tmp_path):
+    """report.html: the decision, then the proposal beside the user's plan, then where to
+    rig it (every lift point's position and bags, as in plan.yaml) with its static margins
+    (by hand: 5 t bags, one lost), the rejected neighbours with their reasons, the design
+    basis; summary.json carries the basis and the margins."""
+    space = make_space(toy, models=["open_parachute_5t"], points=(2, 4), over=(0, 3))
+    s = run_design(toy, space, Options(budget=12, population=12, up_to="statics"),
+                   tmp_path / "out")
+    page = (tmp_path / "out" / "report.html").read_text()
+    b = s["best"]
+    order = [page.index(f"Rig {b['bags']} x open_parachute_5t"), page.index("your plan"),
+             page.index("The plan to rig"), page.index("Lower bound"),
+             page.index("Design basis"), page.index("Evaluations")]
+    assert order == sorted(order)
+    assert b["rated_lift_t"] == 5.0 * b["bags"]
+    assert b["rated_lift_after_losing_one_t"] == 5.0 * (b["bags"] - 1) >= REQUIRED_T
+    assert f"{b['rated_lift_after_losing_one_t']:,.0f} t" in page
+    assert 0 < b["utilisation"] <= 1 and f"{b['utilisation']:.2f}" in page
+    plan = load_scenario(tmp_path / "out" / "plan.yaml")
+    for bag in (x for x in plan.lift.bags if x.kind == "external"):
+        assert f"<td>{bag.x_m:.2f}</td><td>{bag.count}</td>" in page
+    assert s["own_plan"]["bags"] > 0 and s["compared"]
+    assert "breakout factor" in page and any(
+        r["item"].startswith("breakout factor") for r in s["design_basis"])
+    for n in s["nearby"]:
+        assert n["why"] and n["why"].replace("'", "&#x27;") in page
+    # the scenario's own supply is per bag: said beside the bag count it is multiplied by
+    assert f"for each of the {b['bags']} bags" in page
+    s = run_design(toy, space, Options(budget=12, population=12, up_to="statics"),
+                   tmp_path / "again", compare=False)
+    assert "not run: --no-compare" in (tmp_path / "again" / "report.html").read_text()
+
+
+def test_a_bound_just_under_the_target_is_not_shown_as_the_target():
+    """P(unsafe) in per cent to two decimals: 0 of 400 cases, its bound 0.95 % (the report
+    showed 0.010, the 1 % target, before)."""
+    from flexlift.design import report
+
+    p = {"p": 0.0, "low": 0.0, "high": 0.00948, "n": 400}
+    assert report._p(p) == "0.00 % (95 %: 0.00-0.95 %, n = 400)"
+    assert report._p(None) == "not run"

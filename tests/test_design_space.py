@@ -231,3 +231,28 @@ def test_internal_refused_without_tanks(tmp_path, capsys):
                  "--up-to", "statics"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "--internal" in err
+
+
+def test_a_dump_valve_factor_acts_on_a_bag_without_a_catalogue_valve(tmp_path, capsys):
+    """The paper's cylinder has no catalogue valve: its bags purge through the tanker's
+    gas.purge_rate_max_m3_s (2 m3/s). A factor scales that valve (before: nothing, so every
+    --dump-valve choice ran the same plan); a scenario that gives the key itself, which
+    replaces any catalogue valve, refuses a factor (exit 2)."""
+    from flexlift.scenario.valves import external_valve
+    from flexlift.structure.hull import hull_from_scenario as hull_of
+
+    tanker = load_scenario("tanker")
+    space = make_space(tanker, models=["paper_cylinder_565t"], dump_factors=[1.0, 3.0])
+    valves = {}
+    for f in (1.0, 3.0):
+        c = _cand(model="paper_cylinder_565t", points=4, count=2, extra=0,
+                  dump_valve_factor=f)
+        sc = tanker.with_changes(**candidate_changes(c, space, hull_of(tanker), tanker))
+        valves[f] = external_valve(sc).m3_s
+    assert valves == {1.0: pytest.approx(2.0), 3.0: pytest.approx(6.0)}
+    own = tmp_path / "own.yaml"
+    own.write_text(Path(TOY).read_text() + "gas:\n  purge_rate_max_m3_s: 0.5\n")
+    code = main(["design", str(own), "--dump-valve", "1,2", "--out", str(tmp_path / "o"),
+                 "--up-to", "statics"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "gas.purge_rate_max_m3_s" in err

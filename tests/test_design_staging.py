@@ -124,3 +124,36 @@ def test_the_benchmark_merges_rows_by_case():
     assert [(r["case"], r.get("wall_s")) for r in new["cases"]] == [
         ("tanker", 96.5), ("pipeline", 300.0), ("heavy", 431.3), ("toy", None)]
     assert new["budget"] == 24 and old["cases"][1]["wall_s"] == 985.3
+
+
+def test_a_single_failure_hint_asks_only_for_what_was_not_searched(pipe):
+    """The words for no plan stopped by single failures: an option the space already
+    varied (here the dump valve and the modes) is named as searched, not asked for again;
+    an incomplete case is told apart from an unsafe one."""
+    rows = [_row(40, "contingency", "unsafe on bag_rupture", "bag_rupture", "breakout"),
+            _row(41, "contingency", "incomplete on bag_rupture", "bag_rupture", "pull")]
+    rows[1]["contingency"]["first"]["outcome"] = "incomplete"
+    fixed = report.no_plan(rows, make_space(pipe, models=["enclosed_10t"]))
+    hint = " ".join(fixed["what_would_change_it"])
+    assert "a larger dump valve (--dump-valve)" in hint and "other control modes" in hint
+    assert "(incomplete)" in hint and "incomplete: the run ended" in hint
+    wide = report.no_plan(rows, make_space(pipe, models=["enclosed_10t"],
+                                           dump_factors=[1.0, 4.0],
+                                           modes=["decentralized", "coordinated"]))
+    hint = " ".join(wide["what_would_change_it"])
+    assert "--dump-valve" not in hint and "--modes" not in hint
+    assert "searched without a plan: " in hint and "dump valves up to 4 x" in hint
+    assert "another bag than enclosed_10t (--bags)" in hint
+
+
+def test_a_nominal_hint_does_not_ask_for_speeds_or_valves_already_searched(pipe):
+    rows = [_row(30, "nominal", "ascent velocity: p8 rose faster")]
+    fixed = " ".join(report.no_plan(rows, make_space(pipe, models=["enclosed_10t"]))
+                     ["what_would_change_it"])
+    assert "(--speeds)" in fixed and "(--dump-valve)" in fixed
+    wide = " ".join(report.no_plan(rows, make_space(pipe, models=["enclosed_10t"],
+                                                    speeds=[0.1, 0.2],
+                                                    dump_factors=[1.0, 2.0]))
+                    ["what_would_change_it"])
+    assert "(--speeds)" not in wide and "(--dump-valve)" not in wide
+    assert "searched did not stop it" in wide

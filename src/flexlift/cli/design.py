@@ -133,6 +133,8 @@ def _main(args: argparse.Namespace) -> int:
     from flexlift.sweep.executors import make_engine
 
     scenario = scenario_from(args)
+    if args.workers is not None and args.workers < 1:
+        raise InputError("--workers", args.workers, "at least 1 local process")
     if args.span is not None and len(args.span) != 2:
         raise InputError("--span", ",".join(map(str, args.span)), "two numbers FROM,TO [m]")
     space = make_space(scenario, models=args.bags, points=args.points, over=args.over,
@@ -170,11 +172,16 @@ def _print(s: dict, out: Path) -> None:
     if b is not None:
         p = b["p_unsafe"] or {}
         inner = f", {b['internal']} internal" if b.get("internal") else ""
+        c = b["contingency"]
+        single = ("not run" if not c else ", ".join(
+            f"{v} {k.replace('_', ' ')}" for k, v in c.items() if v)
+            + f" of {b.get('contingency_cases') or sum(c.values())}")
         lines.append(f"proposal: {b['bags']} x {' + '.join(b['types'])}{inner} at "
                      f"{len(b['points'])} lift "
                      f"points ({b['mode']}, {b['ascent_speed_m_s']:g} m/s); single failures "
-                     f"{b['contingency'] or 'not run'}; P(unsafe) "
-                     + (f"{p['p']:.3f} ({p['low']:.3f}-{p['high']:.3f}, n = {p['n']})"
+                     f"{single}; P(unsafe) "
+                     + (f"{100 * p['p']:.2f} % (95 %: {100 * p['low']:.2f}-"
+                        f"{100 * p['high']:.2f} %, n = {p['n']})"
                         if p.get("p") is not None else "not run"))
         lines.append(f"plan: {out / 'plan.yaml'}")
     else:

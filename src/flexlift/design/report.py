@@ -2,8 +2,10 @@
 for a search that found no plan (docs/guide/design.md).
 
 The report leads with the decision: the proposal beside the user's own plan (bags, single
-failures, P(unsafe)), then the lower bound, the Pareto front, why each nearby alternative was
-rejected (the rung, the check, the failure and its margin) and the evaluations by rung.
+failures, P(unsafe)), the plan to rig (each lift point's position and bags, the control and
+equipment, the static margins), then the lower bound, the Pareto front, why each nearby alternative was
+rejected (the rung, the check, the failure and its margin), the design basis the proposal
+was checked by, and the evaluations by rung.
 """
 
 from __future__ import annotations
@@ -96,14 +98,26 @@ def no_plan(rows: list[dict], space) -> dict:
                 f"reached it (criteria broken, by candidates: {named})")
         if getattr(space, "staged", False) and tuple(space.sequences) == ("own",):
             hint += "; on a staged lift, every bag at once (--sequence own,none)"
-        hint += ("; a slower planned ascent (--speeds) or a larger dump valve (--dump-valve) "
-                 "against a runaway ascent")
+        speeds = tuple(getattr(space, "ascent_speeds", ()))
+        dump = tuple(getattr(space, "dump_valve_factors", (1.0,)))
+        ask = ([] if len(speeds) > 1 else ["a slower planned ascent (--speeds)"]) + (
+            [] if dump and max(dump) > 1.0 else ["a larger dump valve (--dump-valve)"])
+        if ask:
+            hint += "; " + " or ".join(ask) + " against a runaway ascent"
+        else:
+            hint += ("; the planned ascent speeds and dump valves searched did not stop it "
+                     "(see below)")
         hints.append(hint)
     if where.get("contingency"):
         kinds = ", ".join(f"{k}: {v}" for k, v in broke["contingency"].items())
-        hints.append(f"some single failure was unsafe for every plan tried ({kinds}); a second "
-                     "supply (--supply) or a larger dump valve (--dump-valve), or more bags "
-                     "(--over)")
+        hint = (f"a single failure stopped each of the {where['contingency']} candidates that "
+                f"reached them ({kinds})")
+        if any("(incomplete)" in k for k in broke["contingency"]):
+            hint += ("; incomplete: the run ended before the lift finished after the loss (it "
+                     "never separated, or its hold was cut short): a larger breakout pull "
+                     "(--pulls) or more bags (--over), or a longer simulation.duration_s")
+        hint += _searched(space)
+        hints.append(hint)
     if where.get("salvage"):
         hints.append("a slower planned ascent (--speeds) or more margin (--over): the salvage "
                      "study's P(unsafe) bound stays above the target")
@@ -111,6 +125,39 @@ def no_plan(rows: list[dict], space) -> dict:
             "criteria": broke,
             "what_would_change_it": hints or ["a wider search (--budget, --over, --points)"],
             "best_candidates": climbed(rows, 5)}
+
+
+def _searched(space) -> str:
+    """What the space left fixed (each one a change to try: its option) and what it already
+    varied without a plan (not to be asked for again)."""
+    untried, tried = [], []
+    models = tuple(getattr(space, "models", ()))
+    if len(models) == 1:
+        untried.append(f"another bag than {models[0]} (--bags)")
+    elif models:
+        tried.append(f"{len(models)} catalogue bags")
+    supplies = tuple(getattr(space, "supplies", (None,)))
+    (tried if len(supplies) > 1 else untried).append(
+        "compressor supplies " + ", ".join("auto" if v is None else f"{v:g}" for v in supplies)
+        if len(supplies) > 1 else "a second or larger supply (--supply)")
+    dump = tuple(getattr(space, "dump_valve_factors", (1.0,)))
+    if max(dump) > 1.0:
+        tried.append(f"dump valves up to {max(dump):g} x")
+    else:
+        untried.append("a larger dump valve (--dump-valve)")
+    for attr, opt, what in (("modes", "--modes", "control modes"),
+                            ("breakout_pulls", "--pulls", "breakout pulls"),
+                            ("ascent_speeds", "--speeds", "planned ascent speeds")):
+        vals = tuple(getattr(space, attr, ()))
+        if len(vals) > 1:
+            tried.append(f"{what} " + ", ".join("auto" if v is None else f"{v}" for v in vals))
+        elif vals:
+            untried.append(f"other {what} ({opt})")
+    over = getattr(space, "over", None)
+    if over is not None:
+        untried.append(f"more bags than the fewest that lift + {over[1]} (--over)")
+    out = "; not searched: " + ", ".join(untried) if untried else ""
+    return out + ("; searched without a plan: " + ", ".join(tried) if tried else "")
 
 
 def _figure(summary: dict, rows: list[dict]) -> bytes:
@@ -150,15 +197,29 @@ def _row(cells, head=False) -> str:
 
 
 def _p(p: dict | None) -> str:
+    """P(unsafe) and its 95 % interval in per cent, to two decimals (a bound of 0.95 % is
+    not shown as the 1 % target it meets)."""
     if not p or p.get("p") is None:
         return "not run"
-    return f"{p['p']:.3f} ({p['low']:.3f}-{p['high']:.3f}, n = {p['n']})"
+    return (f"{100 * p['p']:.2f} % (95 %: {100 * p['low']:.2f}-{100 * p['high']:.2f} %, "
+            f"n = {p['n']})")
 
 
 def _counts(c: dict | None) -> str:
     if not c:
         return "not run"
-    return ", ".join(f"{v} {k}" for k, v in c.items() if v)
+    return ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in c.items() if v)
+
+
+def _supply(summary: dict) -> str:
+    """The scenario's own gas supply in the words of the design basis (per bag, and what it
+    assumes), so that a proposal of many bags shows what it takes for granted."""
+    row = next((r for r in summary.get("design_basis") or []
+                if r["item"].startswith("gas supply")), None)
+    if row is None:
+        return "the scenario's"
+    note = f"; {row['note']}" if row.get("note") else ""
+    return f"the scenario's: {row['value']}{note}, for each of the {summary['best']['bags']} bags"
 
 
 def _decision(summary: dict) -> str:
@@ -175,13 +236,78 @@ def _decision(summary: dict) -> str:
                            "</p>" if summary.get("not_assessed") else ""))
 
 
+def _rigging(summary: dict) -> str:
+    """The proposal as a salvor rigs it: each lift point's position, bags and model, the
+    internal bags, the control and equipment choices, and the static margins."""
+    b, lb = summary["best"], summary["lower_bound"]
+    if b is None:
+        return ""
+    rows = [_row(["lift point", "x [m] from aft", "bags", "catalogue bag"], True)]
+    rows += [_row([f"p{j + 1}", f"{p['x_m']:.2f}", p["count"], p["model"]])
+             for j, p in enumerate(b["points"])]
+    if b.get("internal"):
+        rows.append(_row(["internal", "in the ballast tanks", b["internal"], b["types"][0]]))
+    supply = b.get("supply_free_air_m3_min")
+    pull = b.get("breakout_pull_t")
+    items = [("control mode", b["mode"]),
+             ("planned ascent speed", f"{b['ascent_speed_m_s']:g} m/s"),
+             ("breakout pull", "the default share" if pull is None else f"{pull:g} t"),
+             ("dump valve", f"{b['dump_valve_factor']:g} x the catalogue bag's"),
+             ("compressor supply", _supply(summary) if supply is None
+              else f"{supply:g} m3/min free air, shared by the bags"),
+             ("staging", {"own": "the scenario's own", "none": "every bag at once"}.get(
+                 b.get("sequence") or "own", b.get("sequence")))]
+    margins = []
+    if b.get("rated_lift_t") is not None:
+        req = lb["required_lift_t"]
+        margins.append(f"rated lift {b['rated_lift_t']:,.0f} t against the required "
+                       f"{req:,.0f} t ({b['rated_lift_t'] / req:.3f} x); after losing the "
+                       f"largest bag {b['rated_lift_after_losing_one_t']:,.0f} t "
+                       f"({b['rated_lift_after_losing_one_t'] / req:.3f} x)")
+    if b.get("utilisation") is not None:
+        margins.append(f"largest hull girder bending utilisation in the design cases "
+                       f"{b['utilisation']:.2f} (at most 1)")
+    if b.get("contingency_cases"):
+        margins.append(f"single failures: {_counts(b['contingency'])} of "
+                       f"{b['contingency_cases']} cases")
+    if b.get("salvage_counts"):
+        margins.append("salvage study: " + _counts(b["salvage_counts"]))
+    return ("<h2>The plan to rig</h2><p>As written to plan.yaml (the scenario every command "
+            "takes unchanged).</p><table>" + "".join(rows) + "</table><ul>"
+            + "".join(f"<li>{html.escape(k)}: {html.escape(str(v))}</li>" for k, v in items)
+            + "</ul><p>Margins:</p><ul>"
+            + "".join(f"<li>{html.escape(m)}</li>" for m in margins) + "</ul>")
+
+
+def _basis(summary: dict) -> str:
+    rows = summary.get("design_basis") or []
+    if not rows:
+        return ""
+    judged = "the proposal" if summary["best"] else "your plan"
+    return (f"<h2>Design basis</h2><p>The factors, limits and their sources {judged} was "
+            "checked by.</p><table>" + _row(["item", "value", "source", "note"], True)
+            + "".join(_row([r["item"], r["value"], r["source"], r.get("note", "")])
+                      for r in rows) + "</table>")
+
+
+def _own_statics(own: dict) -> str:
+    st = own.get("statics") or {}
+    if st.get("passed", True):
+        return "passed"
+    return f"failed: {st.get('check')} ({st.get('why', '')})"
+
+
 def _side_by_side(summary: dict) -> str:
     own, b = summary.get("own_plan"), summary["best"]
-    rows = [_row(["", "your plan", "proposal"], True)]
+    if own is None:
+        head = "your plan (not run: --no-compare)"
+    else:
+        head = "your plan"
+    rows = [_row(["", head, "proposal"], True)]
     o = own or {}
     rows.append(_row(["bags", o.get("bags", "-"), b["bags"] if b else "-"]))
-    rows.append(_row(["static checks", (o.get("statics") or {}).get("check") or "passed"
-                      if own else "-", "passed" if b else "-"]))
+    rows.append(_row(["static checks", _own_statics(own) if own else "-",
+                      "passed" if b else "-"]))
     rows.append(_row(["nominal ascent", (o.get("nominal") or {}).get("outcome", "-"),
                       "safe" if b else "-"]))
     rows.append(_row(["single failures", _counts((o.get("contingency") or {}).get("counts")),
@@ -196,14 +322,16 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
     write_bytes(folder / "pareto.png", _figure(summary, rows))
     lb, ev = summary["lower_bound"], summary["evaluations"]
     parts = [f"<h1>flexlift design: {html.escape(summary['scenario'])}</h1>",
-             _decision(summary), _side_by_side(summary),
+             _decision(summary), _side_by_side(summary), _rigging(summary),
              f"<h2>Lower bound</h2><p>{html.escape(lb['model'])}: the required "
              f"{lb['required_lift_t']:,.0f} t needs N = {lb['n']} bags; still lifting after "
              f"losing any one, N-1 = {lb['n_minus_1']}.</p>",
              "<h2>Pareto front</h2><img src='pareto.png' alt='bags and gas of every "
              "candidate'>",
              "<table>" + _row(["bags", "model", "gas m3", "cost", "P(unsafe)"], True)
-             + "".join(_row([p["bags"], " + ".join(p["types"]), p["gas_m3"], p["cost"],
+             + "".join(_row([p["bags"], " + ".join(p["types"]),
+                             "-" if p["gas_m3"] is None else f"{p['gas_m3']:,.0f}",
+                             "-" if p["cost"] is None else f"{p['cost']:,.0f}",
                              _p(p["p_unsafe"])]) for p in summary["pareto"]) + "</table>",
              "<h2>" + ("Why the nearby alternatives were rejected" if summary["best"] else
                        "The candidates that climbed highest, and why each was rejected")
@@ -220,6 +348,7 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
         parts.append("<h2>No plan: what would change it</h2><ul>" + "".join(
             f"<li>{html.escape(h)}</li>" for h in np_["what_would_change_it"]) + "</ul>"
             + (f"<p>What broke, by candidates:</p><ul>{broke}</ul>" if broke else ""))
+    parts.append(_basis(summary))
     parts.append(f"<h2>Evaluations</h2><p>{ev['candidates']} candidates ({ev['distinct']} "
                  "distinct); reached each rung: " + ", ".join(
                      f"{RUNG_TEXT[k]} {v}" for k, v in ev["reached"].items())

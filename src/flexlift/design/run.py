@@ -101,13 +101,17 @@ def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
     ev = found["evaluator"]
     front = pareto(rows, options.objectives)
     best = front[0] if front else None
+    from flexlift.scenario.basis import design_basis
+
+    # the factors, limits and their sources the proposal (else the user's plan) was judged by
+    basis = design_basis(ev.scenario_of(_candidate(best)) if best else scenario)
     model = best["candidate"]["model"] if best else _closest(rows)["candidate"]["model"]
     reached = {rung: sum(1 for r in rows if RUNGS.index(r["reached"]) >= k)
                for k, rung in enumerate(RUNGS)}
     return {
         "scenario": scenario.name, "found": best is not None,
-        "best": _brief(best) if best else None,
-        "pareto": [_brief(r) for r in front],
+        "best": _brief(best, space.entries) if best else None,
+        "pareto": [_brief(r, space.entries) for r in front],
         "lower_bound": {**ev.bounds[model], "model": model},
         "evaluations": {"candidates": len(rows), "distinct": len({r["candidate_key"]
                                                                   for r in rows}),
@@ -118,7 +122,7 @@ def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
                          f"the search stopped at the {options.up_to} rung: what comes after it "
                          "(" + ", ".join(RUNGS[RUNGS.index(options.up_to) + 1:]) + ") was not "
                          "checked; P(unsafe) not assessed"),
-        "own_plan": own, "options": {k: (list(v) if isinstance(v, tuple) else v)
+        "own_plan": own, "compared": own is not None, "design_basis": basis, "options": {k: (list(v) if isinstance(v, tuple) else v)
                                      for k, v in vars(options).items()},
         "space": {"models": list(space.models), "points": list(space.points),
                   "over": list(space.over), "count": space.count, "modes": list(space.modes),
@@ -155,13 +159,22 @@ def _closest(rows: list[dict]) -> dict:
     return max(rows, key=lambda r: (RUNGS.index(r["reached"]), r["passed"], -r["bags"]))
 
 
-def _brief(r: dict) -> dict:
+def _brief(r: dict, entries: dict) -> dict:
+    """The summary of row ``r`` (``entries``: the space's catalogue entries, by model)."""
     c = r.get("contingency") or {}
     s = r.get("salvage") or {}
     cand = _candidate(r)
     models = cand.models()
+    lifts = [float(r["lift_t"])] * cand.internal + [
+        float(entries[m]["lift_t"]) for m, n in zip(models, r["counts"]) for _ in range(n)]
+    st = r.get("statics") or {}
     return {"bags": r["bags"], "types": sorted(set(models), key=models.index),
             "type": r["type"], "lift_t": r["lift_t"],
+            # the static margins: the rated lift in all and after losing the largest bag, the
+            # largest bending utilisation in the design cases
+            "rated_lift_t": round(sum(lifts), 1),
+            "rated_lift_after_losing_one_t": round(sum(lifts) - max(lifts), 1),
+            "utilisation": st.get("utilisation"),
             "points": [{"x_m": x, "count": n, "model": m} for x, n, m in
                        zip(r.get("points_m", []), r["counts"], models)],
             "internal": cand.internal, "supply_free_air_m3_min": cand.supply_free_air_m3_min,

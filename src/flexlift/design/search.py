@@ -66,6 +66,8 @@ def check_options(o: Options, space: Space) -> None:
         raise InputError("--budget", o.budget, "at least 1 candidate")
     if o.population < 2:
         raise InputError("--population", o.population, "at least 2 candidates per generation")
+    if o.samples < 1:
+        raise InputError("--samples", o.samples, "at least 1 salvage case")
     if o.up_to not in RUNGS:
         raise InputError("--up-to", o.up_to, f"one of {', '.join(RUNGS)}")
     for name in o.objectives:

@@ -150,6 +150,9 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
     c = scenario.control
     if count is not None and not 1 <= int(count):
         raise InputError("--count", count, "a whole number of bags per point, at least 1")
+    if count is not None and over is not None:  # points x count fixes the bags: over is moot
+        raise InputError("--over", f"{over[0]}..{over[1]}", f"--count {count} fixes the bags "
+                         "(lift points x count): give --count or --over, not both")
     own = len(scenario.lift.bags or [])  # the user's own plan's lift points
     space = Space(models=models, points=_pair(points, (1, max(12, 2 * own)), "--points"),
                   over=_pair(over, (0, 12), "--over", low=0),
@@ -170,7 +173,36 @@ def make_space(scenario, models=None, points=None, over=None, count=None, modes=
                          ("--dump-valve", space.dump_valve_factors)):
         if not values:
             raise InputError(name, "", "give at least one value")
+    _check_choices(scenario, space)
     return space
+
+
+def _check_choices(scenario, space: Space) -> None:
+    """Each control choice applied alone to the scenario, so that a value no candidate could
+    take (an unknown mode, a speed or pull out of range) is refused here, in one line, not
+    found out by every candidate's statics; a dump-valve factor must be positive."""
+    for name, key, values in (("--modes", "control.mode", space.modes),
+                              ("--speeds", "control.ascent_speed_m_s", space.ascent_speeds),
+                              ("--pulls", "control.breakout_pull_t", space.breakout_pulls)):
+        for v in values:
+            if v is None:
+                continue
+            try:
+                scenario.with_changes(**{key: v})
+            except InputError as exc:
+                parts = str(exc).split(": ", 2)  # "<source>: <key> = <value>: <allowed>"
+                raise InputError(name, v, f"{key}: {parts[-1]}") from None
+    for f in space.dump_valve_factors:
+        if not (isinstance(f, (int, float)) and 0.0 < f <= 100.0):
+            raise InputError("--dump-valve", f, "a factor on the catalogue bag's dump-valve "
+                             "capacity, 0 < factor <= 100")
+    from flexlift.scenario.valves import purge_given
+
+    if any(f != 1.0 for f in space.dump_valve_factors) and purge_given(scenario):
+        # the scenario's own valve replaces every catalogue bag's: a factor would change nothing
+        raise InputError("--dump-valve", ",".join(f"{f:g}" for f in space.dump_valve_factors),
+                         "the scenario gives gas.purge_rate_max_m3_s, which replaces the "
+                         "catalogue bag's dump valve: change that key instead")
 
 
 def _internal(scenario, value, entries) -> tuple[int, int]:
@@ -262,7 +294,7 @@ def positions(hull, scenario, counts: list[int], span: tuple[float, float],
     return out
 
 
-def catalogue_bag(candidate: Candidate, space: Space) -> dict:
+def catalogue_bag(candidate: Candidate, space: Space, scenario=None) -> dict:
     """``lift.catalogue_bag`` of ``candidate``: its bag's entry (with per-point types the
     envelope of the points' bags, :func:`flexlift.design.mixed.envelope`), its dump valve
     scaled by the candidate's factor."""
@@ -276,6 +308,11 @@ def catalogue_bag(candidate: Candidate, space: Space) -> dict:
     bag["model"] = candidate.model
     if bag.get("dump_valve_m3_s") is not None:
         bag["dump_valve_m3_s"] = float(bag["dump_valve_m3_s"]) * candidate.dump_valve_factor
+    elif candidate.dump_valve_factor != 1.0 and scenario is not None:
+        # an entry without a valve (the paper's cylinder) purges through the scenario's
+        # gas.purge_rate_max_m3_s: the factor is on that valve, the external bags' own
+        bag["dump_valve_m3_s"] = (float(scenario.gas.purge_rate_max_m3_s)
+                                  * candidate.dump_valve_factor)
     return bag
 
 
@@ -290,7 +327,8 @@ def candidate_changes(candidate: Candidate, space: Space, hull, scenario) -> dic
     bags = [{"name": f"p{j + 1}", "kind": "external", "x_m": round(x, 4), "count": n,
              "lift_t": float(space.entries[m]["lift_t"])}
             for j, (x, n, m) in enumerate(zip(xs, counts, candidate.models()))]
-    out = {"lift.catalogue_bag": catalogue_bag(candidate, space), "lift.bags": bags + inner,
+    out = {"lift.catalogue_bag": catalogue_bag(candidate, space, scenario),
+           "lift.bags": bags + inner,
            "lift.internal_bags": candidate.internal, "lift.bag_lift_t": None,
            "control.mode": candidate.mode,
            "control.ascent_speed_m_s": candidate.ascent_speed_m_s,
