@@ -50,7 +50,6 @@ import json
 import math
 import os
 import re
-import socket
 import sqlite3
 import subprocess
 import sys
@@ -63,8 +62,10 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "tests"))
+from live_helpers import Mosquitto  # noqa: E402 - the tests' own broker, on a free port
+
 OUT = HERE / "live_network.json"
-MOSQUITTO = "/usr/sbin/mosquitto"
 PYTHON = sys.executable
 #: the tanker's sensors (benchmarks/live_master.py's at 10 Hz: live_master_10hz.json)
 TANKER_SENSORS = """
@@ -117,47 +118,6 @@ def write_bags73(folder: Path) -> Path:
 
 def loadavg() -> list[float]:
     return [round(x, 2) for x in os.getloadavg()]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Mosquitto:
-    """Debian's Mosquitto on a free loopback port, its configuration in ``folder``."""
-
-    def __init__(self, folder: Path):
-        self.port = free_port()
-        self.conf = folder / "mosquitto.conf"
-        self.conf.write_text(f"listener {self.port} 127.0.0.1\nallow_anonymous true\n"
-                             "persistence false\nmax_queued_messages 100000\n")
-        self.logfile = open(folder / "mosquitto.log", "wb")  # noqa: SIM115
-        self.proc = subprocess.Popen([MOSQUITTO, "-c", str(self.conf)], stdout=self.logfile,
-                                     stderr=subprocess.STDOUT)
-        end = time.monotonic() + 5
-        while time.monotonic() < end:
-            with contextlib.suppress(OSError):
-                socket.create_connection(("127.0.0.1", self.port), 0.2).close()
-                return
-            time.sleep(0.05)
-        self.stop()
-        raise RuntimeError("mosquitto did not start")
-
-    @property
-    def url(self) -> str:
-        return f"mqtt://127.0.0.1:{self.port}"
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            os.kill(self.proc.pid, 15)
-            try:
-                self.proc.wait(5)
-            except subprocess.TimeoutExpired:
-                os.kill(self.proc.pid, 9)
-                self.proc.wait(5)
-        self.logfile.close()
 
 
 class Observer:
@@ -230,7 +190,7 @@ def chain(folder: Path, scenario: Path, lift: str, speed: float, until: str, wal
           flood: int = 0, ends: str = "live") -> dict:
     """One run: Mosquitto, the observer (and flooder), live --control master, the rig; the
     processes' outputs, the observer's messages, live's log and report."""
-    broker = Mosquitto(folder)
+    broker = Mosquitto(folder).start()
     procs: list[subprocess.Popen] = []
     observer = None
     try:
