@@ -434,7 +434,8 @@ def test_the_valves_noise_moves_the_gas_by_its_stated_spread_whatever_the_interv
 def test_resampling_onto_one_member_leaves_the_gas_a_load_cell_cannot_tell(tanker):
     """Every weight on one member: without a floor the kernel's weighted spread is zero
     and every copy has that member's gas exactly (the collapse that lost the tanker's
-    ascent); with the load cells' floor (gas_floor_m3) the copies part by about it."""
+    ascent); with the load cells' floor (gas_floor_m3) the copies part by about it, or by
+    the members' own spread before, whichever is less."""
     ens = Ensemble(tanker, 12, seed=2, control="decentralized")
     ens.advance(1001)
     log_w = np.full(12, -np.inf)
@@ -444,11 +445,17 @@ def test_resampling_onto_one_member_leaves_the_gas_a_load_cell_cannot_tell(tanke
     n = np.array([run.state.n[0] for run in ens.runs])
     assert np.all(n == n[0])  # no floor: collapsed
     ens.runs = state
+    before = np.array([r.state.n[0] for r in state]).std(ddof=1)  # the members' own
     ens.gas_floor_m3[:] = 0.5  # [m^3]: a 5 kN load cell
     assert ens.resample(log_w, np.random.default_rng(0), force=True)
     run = ens.runs[0]
     n = np.array([r.state.n[0] for r in ens.runs])
-    floor = 0.5 * run.state.p[0] / run.records.bags.RT  # [mol]
+    floor = min(0.5 * run.state.p[0] / run.records.bags.RT, before)  # [mol]
     assert len(set(n)) == 12
     assert 0.4 * floor < n.std(ddof=1) < 2.0 * floor
+    # the floor is at most the members' own spread: a load cell's 0.5 m^3 would widen them
+    ens.runs = [r.fork() for r in state]
+    ens.gas_floor_m3[:] = 50.0
+    assert ens.resample(log_w, np.random.default_rng(0), force=True)
+    assert np.array([r.state.n[0] for r in ens.runs]).std(ddof=1) < 2.0 * before
 

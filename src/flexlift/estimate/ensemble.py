@@ -189,10 +189,14 @@ class Ensemble:
         spread = math.sqrt(1.0 - shrink**2)
         n = np.array([run.state.n for run in self.runs])  # (m, nb)
         kernels = {"weight": _kernel(self.weight, w), "n": _kernel(n, w)}
-        # weights on one member leave no spread to draw from: never less than the gas a
-        # load cell cannot tell apart (gas_floor_m3, as moles at the members' mean pressure)
+        # weights on one member leave no spread to draw from: never less than the members'
+        # own spread before (unweighted), up to the gas a load cell cannot tell apart
+        # (gas_floor_m3, as moles at the members' mean pressure): the members keep what
+        # spread they had, and a floor of one reading's resolution does not widen a bag
+        # the readings have pinned closer (small bags: the Grieg barge's 5 kN cells)
         p = np.mean([run.state.p for run in self.runs], axis=0)
-        floor = self.gas_floor_m3 * p / self.runs[0].records.bags.RT / spread
+        floor = np.minimum(self.gas_floor_m3 * p / self.runs[0].records.bags.RT,
+                           n.std(axis=0, ddof=1)) / spread
         kernels["n"] = (kernels["n"][0], np.maximum(kernels["n"][1], floor))
         # (filterpy walks its cumulative sum past the end when rounding leaves it just
         # below 1: the weights are given a sum a hair above 1)
