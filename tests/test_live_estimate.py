@@ -16,13 +16,13 @@ from flexlift.live.log import read_table
 pytest.importorskip("flexlift.sensors.tap")
 
 FAULT = """faults:
-  - {kind: bag_rupture, bag: bag_3, time_s: 200.0}
+  - {kind: bag_rupture, bag: bag_3, time_s: 100.0}
 """
-RUPTURE_S = 200.0
+RUPTURE_S = 100.0
 
 
 def test_live_estimate_names_a_rupture_within_30_s_and_nothing_before(tmp_path):
-    """The tanker rig at 10x real time, bag_3 ruptured at 200 s (the hull held on the seabed,
+    """The tanker rig at 10x real time, bag_3 ruptured at 100 s (the hull held on the seabed,
     the master filling): the estimator's one alarm is that rupture, at that bag, within the
     issue's 30 s; it is said, in the log's alarms and in the report, with the forecasts."""
     path = tmp_path / "tanker-live.yaml"
@@ -31,7 +31,7 @@ def test_live_estimate_names_a_rupture_within_30_s_and_nothing_before(tmp_path):
     out = tmp_path / "out"
     proc = subprocess.run(
         [sys.executable, "-m", "flexlift", "live", str(path), "--rig", "--speed", "10",
-         "--until", "300", "--estimate", "--members", "8", "--forecast-every", "100",
+         "--until", "140", "--estimate", "--members", "8", "--forecast-every", "50",
          "--no-plan", "--no-dashboard", "--lift", "tk", "--out", str(out)],
         env=env, capture_output=True, text=True, timeout=240)
     assert proc.returncode == 0, proc.stderr
@@ -41,8 +41,8 @@ def test_live_estimate_names_a_rupture_within_30_s_and_nothing_before(tmp_path):
     assert found == [("bag_rupture", "bag_3")], est["alarms"]
     delay = est["alarms"][0]["time_s"] - RUPTURE_S
     assert 0.0 < delay <= 30.0
-    assert est["estimated_to_s"] >= 298.0 and est["behind_s"] < 5.0
-    assert [f["time_s"] for f in est["forecasts"]][:2] == [100.0, 200.0]  # 300: the last
+    assert est["estimated_to_s"] >= 138.0 and est["behind_s"] < 5.0
+    assert [f["time_s"] for f in est["forecasts"]][:2] == [50.0, 100.0]  # 140: the last
     assert all(f["under"] == "the commands as they stand, held" for f in est["forecasts"])
     for f in est["forecasts"]:  # and under the controller's advice, taking over then
         a = f["advice"]
