@@ -156,7 +156,8 @@ def _connect(args, lift: str, address):
     from flexlift.live.mqtt import Link, start_or_refuse
 
     link = Link(address, [f"flexlift/{lift}/sensor/#"], "live", **args.account)
-    if not start_or_refuse(link):
+    # a broker not answering is waited for at most 10 s, and never past the wall limit
+    if not start_or_refuse(link, min(10.0, args.wall_limit)):
         _say(f"broker at {address.url} not answering yet ({link.failure}): waiting "
              "(reconnecting)")
     return link
