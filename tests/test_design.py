@@ -115,6 +115,60 @@ def test_ladder_and_cache(toy, tmp_path, monkeypatch):
     assert [r["candidate"] for r in again["rows"]] == [r["candidate"] for r in rows]
 
 
+def test_the_code_is_part_of_the_caches_identity(tmp_path):
+    """The digest is over the package's source: the same bytes give the same digest (a copy
+    of the tree), one byte changed in one file another; computed once per process."""
+    import shutil
+
+    from flexlift.plumbing import source
+
+    assert source.code_digest() == source.tree_digest(source.PACKAGE) == source.code_digest()
+    copy = tmp_path / "flexlift"
+    shutil.copytree(source.PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    assert source.tree_digest(copy) == source.code_digest()
+    (copy / "__pycache__").mkdir(exist_ok=True)
+    (copy / "__pycache__" / "x.cpython.pyc").write_bytes(b"compiled")  # not the code
+    assert source.tree_digest(copy) == source.code_digest()
+    target = copy / "design" / "statics.py"
+    data = target.read_bytes()
+    target.write_bytes(data[:-1] + bytes([data[-1] ^ 1]))
+    assert source.tree_digest(copy) != source.code_digest()
+    target.write_bytes(data)
+    (copy / "design" / "statics.py").rename(copy / "design" / "statics2.py")  # a rename too
+    assert source.tree_digest(copy) != source.code_digest()
+
+
+def test_another_code_reruns_the_cached_candidates(toy, tmp_path, monkeypatch):
+    """A rerun in the same folder after a change to flexlift's code (here: its digest made
+    another) continues the folder but answers no candidate from the old evaluations: each
+    is evaluated again (and said in the summary); back on the first code, the cache answers."""
+    from flexlift.plumbing import source
+
+    space = make_space(toy, models=["open_parachute_5t"], points=(2, 4), over=(0, 3))
+    o = Options(budget=12, population=12, up_to="statics")
+    same = o.identity(toy, space)
+    assert o.identity(toy, space) == same
+    first = run_design(toy, space, o, tmp_path / "out", compare=False)
+    assert first["evaluations"]["calls"]["statics"] > 0
+    assert first["evaluations"]["cache_hits"] == first["evaluations"]["cache_stale"] == 0
+    real = source.code_digest()
+    monkeypatch.setattr(source, "code_digest", lambda: real[::-1])  # one source byte changed
+    assert o.identity(toy, space) != same
+    assert o.folder_identity(toy, space) == Options(
+        budget=12, population=12, up_to="statics").folder_identity(toy, space)
+    changed = run_design(toy, space, o, tmp_path / "out", compare=False)
+    ev = changed["evaluations"]
+    assert ev["cache_hits"] == 0 and ev["calls"] == first["evaluations"]["calls"]
+    assert ev["cache_stale"] == first["evaluations"]["distinct"]
+    assert "by another flexlift code answered none" in (tmp_path / "out" / "report.html"
+                                                        ).read_text()
+    assert changed["best"] == first["best"]
+    monkeypatch.undo()
+    back = run_design(toy, space, o, tmp_path / "out", compare=False)
+    assert back["evaluations"]["calls"]["statics"] == 0
+    assert back["evaluations"]["cache_hits"] == 12
+
+
 def test_resume_after_interrupt_same_plan(toy, tmp_path):
     space = make_space(toy, models=["open_parachute_5t", "open_parachute_10t"],
                        points=(1, 6), over=(0, 6))

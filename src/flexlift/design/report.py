@@ -352,8 +352,10 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
     parts.append(f"<h2>Evaluations</h2><p>{ev['candidates']} candidates ({ev['distinct']} "
                  "distinct); reached each rung: " + ", ".join(
                      f"{RUNG_TEXT[k]} {v}" for k, v in ev["reached"].items())
-                 + f"; answered from the cache: {ev['cache_hits']}; "
-                 f"{summary['elapsed_s']:.0f} s.</p>")
+                 + f"; answered from the cache: {ev['cache_hits']}"
+                 + (f" (its {ev['cache_stale']} evaluations by another flexlift code "
+                    "answered none: re-run)" if ev.get("cache_stale") else "")
+                 + f"; {summary['elapsed_s']:.0f} s.</p>")
     write_text(folder / "report.html", "<!doctype html><html><head><meta charset='utf-8'>"
                "<title>flexlift design</title></head><body>" + "\n".join(parts)
                + "</body></html>\n")
