@@ -118,7 +118,7 @@ def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
                         "reached": reached, "calls": found["calls"],
                         "cache_hits": found["cache_hits"],
                         "cache_stale": found["cache_stale"]},
-        "no_plan": None if best else report.no_plan(rows, space),
+        "no_plan": None if best else report.no_plan(rows, space, scenario),
         "not_assessed": (None if options.up_to == "salvage" else
                          f"the search stopped at the {options.up_to} rung: what comes after it "
                          "(" + ", ".join(RUNGS[RUNGS.index(options.up_to) + 1:]) + ") was not "
