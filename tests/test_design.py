@@ -190,6 +190,48 @@ def test_resume_after_interrupt_same_plan(toy, tmp_path):
         tmp_path / "whole" / "plan.yaml").read_text()
 
 
+class _Engine:
+    """Where the stand-ins' cases would run: nothing to start, only closed."""
+
+    def close(self, cancel=False):
+        pass
+
+
+def test_resume_after_an_interrupt_inside_the_single_failures(toy, tmp_path, monkeypatch):
+    """Interrupted inside a generation, in its third single-failure study (its statics and
+    nominal batch done, the candidates before it through every rung and written): the rerun
+    answers those from the cache, runs only the rest, and ends with the plan, the Pareto
+    front and plan.yaml of the uninterrupted search (the other resume test cuts between
+    generations, at the statics alone)."""
+    rungs = Counting(monkeypatch)
+    space = make_space(toy, models=["open_parachute_5t"], points=(1, 6), over=(0, 6))
+    o = Options(budget=24, population=12, up_to="salvage")
+    whole = run_design(toy, space, o, tmp_path / "whole", engine=_Engine(), compare=False)
+    real, n0 = rungs.contingency, len(rungs.seen["contingency"])
+
+    def cut(sc, engine, kinds=None, stop=True):
+        if len(rungs.seen["contingency"]) - n0 == 2:
+            raise KeyboardInterrupt
+        return real(sc, engine, kinds, stop)
+
+    monkeypatch.setattr(dynamic, "contingency", cut)
+    with pytest.raises(KeyboardInterrupt):
+        run_design(toy, space, o, tmp_path / "cut", engine=_Engine(), compare=False)
+    lines = [json.loads(x)["result"] for x in
+             (tmp_path / "cut" / "evaluations.jsonl").read_text().splitlines()]
+    done = sum(r["reached"] in ("contingency", "salvage") for r in lines)
+    assert done == 2 and len(lines) < 12  # cut in the first generation, two studies kept
+    monkeypatch.setattr(dynamic, "contingency", real)
+    resumed = run_design(toy, space, o, tmp_path / "cut", engine=_Engine(), compare=False)
+    assert whole["found"] and resumed["best"] == whole["best"]
+    assert resumed["pareto"] == whole["pareto"]
+    ev, all_ = resumed["evaluations"], whole["evaluations"]
+    assert ev["calls"]["contingency"] == all_["calls"]["contingency"] - done
+    assert ev["calls"]["statics"] == all_["calls"]["statics"] - len(lines)
+    assert (tmp_path / "cut" / "plan.yaml").read_text() == (
+        tmp_path / "whole" / "plan.yaml").read_text()
+
+
 def test_plan_yaml_runs_unchanged(toy, tmp_path):
     from flexlift.ascent import simulate
     from flexlift.sweep.spec import parse_spec
@@ -251,7 +293,8 @@ def test_no_plan_from_the_whole_catalogue(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra", [["--target", "0"], ["--target", "1"], ["--target", "1.5"],
-                                   ["--budget", "0"],
+                                   ["--target", "-0.5"], ["--target", "nan"],
+                                   ["--budget", "0"], ["--budget", "-3"], ["--population", "1"],
                                    ["--bags", "no_such_bag"], ["--points", "5..2"],
                                    ["--span", "20,10"], ["--objectives", "cost"],
                                    ["--bags", ","], ["--count", "3", "--over", "2..4"],
