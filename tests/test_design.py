@@ -115,6 +115,60 @@ def test_ladder_and_cache(toy, tmp_path, monkeypatch):
     assert [r["candidate"] for r in again["rows"]] == [r["candidate"] for r in rows]
 
 
+def test_the_code_is_part_of_the_caches_identity(tmp_path):
+    """The digest is over the package's source: the same bytes give the same digest (a copy
+    of the tree), one byte changed in one file another; computed once per process."""
+    import shutil
+
+    from flexlift.plumbing import source
+
+    assert source.code_digest() == source.tree_digest(source.PACKAGE) == source.code_digest()
+    copy = tmp_path / "flexlift"
+    shutil.copytree(source.PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    assert source.tree_digest(copy) == source.code_digest()
+    (copy / "__pycache__").mkdir(exist_ok=True)
+    (copy / "__pycache__" / "x.cpython.pyc").write_bytes(b"compiled")  # not the code
+    assert source.tree_digest(copy) == source.code_digest()
+    target = copy / "design" / "statics.py"
+    data = target.read_bytes()
+    target.write_bytes(data[:-1] + bytes([data[-1] ^ 1]))
+    assert source.tree_digest(copy) != source.code_digest()
+    target.write_bytes(data)
+    (copy / "design" / "statics.py").rename(copy / "design" / "statics2.py")  # a rename too
+    assert source.tree_digest(copy) != source.code_digest()
+
+
+def test_another_code_reruns_the_cached_candidates(toy, tmp_path, monkeypatch):
+    """A rerun in the same folder after a change to flexlift's code (here: its digest made
+    another) continues the folder but answers no candidate from the old evaluations: each
+    is evaluated again (and said in the summary); back on the first code, the cache answers."""
+    from flexlift.plumbing import source
+
+    space = make_space(toy, models=["open_parachute_5t"], points=(2, 4), over=(0, 3))
+    o = Options(budget=12, population=12, up_to="statics")
+    same = o.identity(toy, space)
+    assert o.identity(toy, space) == same
+    first = run_design(toy, space, o, tmp_path / "out", compare=False)
+    assert first["evaluations"]["calls"]["statics"] > 0
+    assert first["evaluations"]["cache_hits"] == first["evaluations"]["cache_stale"] == 0
+    real = source.code_digest()
+    monkeypatch.setattr(source, "code_digest", lambda: real[::-1])  # one source byte changed
+    assert o.identity(toy, space) != same
+    assert o.folder_identity(toy, space) == Options(
+        budget=12, population=12, up_to="statics").folder_identity(toy, space)
+    changed = run_design(toy, space, o, tmp_path / "out", compare=False)
+    ev = changed["evaluations"]
+    assert ev["cache_hits"] == 0 and ev["calls"] == first["evaluations"]["calls"]
+    assert ev["cache_stale"] == first["evaluations"]["distinct"]
+    assert "by another flexlift code answered none" in (tmp_path / "out" / "report.html"
+                                                        ).read_text()
+    assert changed["best"] == first["best"]
+    monkeypatch.undo()
+    back = run_design(toy, space, o, tmp_path / "out", compare=False)
+    assert back["evaluations"]["calls"]["statics"] == 0
+    assert back["evaluations"]["cache_hits"] == 12
+
+
 def test_resume_after_interrupt_same_plan(toy, tmp_path):
     space = make_space(toy, models=["open_parachute_5t", "open_parachute_10t"],
                        points=(1, 6), over=(0, 6))
@@ -132,6 +186,48 @@ def test_resume_after_interrupt_same_plan(toy, tmp_path):
     resumed = run_design(toy, space, o, tmp_path / "cut", compare=False)
     assert resumed["evaluations"]["cache_hits"] >= len(lines)
     assert resumed["best"] == whole["best"] and resumed["pareto"] == whole["pareto"]
+    assert (tmp_path / "cut" / "plan.yaml").read_text() == (
+        tmp_path / "whole" / "plan.yaml").read_text()
+
+
+class _Engine:
+    """Where the stand-ins' cases would run: nothing to start, only closed."""
+
+    def close(self, cancel=False):
+        pass
+
+
+def test_resume_after_an_interrupt_inside_the_single_failures(toy, tmp_path, monkeypatch):
+    """Interrupted inside a generation, in its third single-failure study (its statics and
+    nominal batch done, the candidates before it through every rung and written): the rerun
+    answers those from the cache, runs only the rest, and ends with the plan, the Pareto
+    front and plan.yaml of the uninterrupted search (the other resume test cuts between
+    generations, at the statics alone)."""
+    rungs = Counting(monkeypatch)
+    space = make_space(toy, models=["open_parachute_5t"], points=(1, 6), over=(0, 6))
+    o = Options(budget=24, population=12, up_to="salvage")
+    whole = run_design(toy, space, o, tmp_path / "whole", engine=_Engine(), compare=False)
+    real, n0 = rungs.contingency, len(rungs.seen["contingency"])
+
+    def cut(sc, engine, kinds=None, stop=True):
+        if len(rungs.seen["contingency"]) - n0 == 2:
+            raise KeyboardInterrupt
+        return real(sc, engine, kinds, stop)
+
+    monkeypatch.setattr(dynamic, "contingency", cut)
+    with pytest.raises(KeyboardInterrupt):
+        run_design(toy, space, o, tmp_path / "cut", engine=_Engine(), compare=False)
+    lines = [json.loads(x)["result"] for x in
+             (tmp_path / "cut" / "evaluations.jsonl").read_text().splitlines()]
+    done = sum(r["reached"] in ("contingency", "salvage") for r in lines)
+    assert done == 2 and len(lines) < 12  # cut in the first generation, two studies kept
+    monkeypatch.setattr(dynamic, "contingency", real)
+    resumed = run_design(toy, space, o, tmp_path / "cut", engine=_Engine(), compare=False)
+    assert whole["found"] and resumed["best"] == whole["best"]
+    assert resumed["pareto"] == whole["pareto"]
+    ev, all_ = resumed["evaluations"], whole["evaluations"]
+    assert ev["calls"]["contingency"] == all_["calls"]["contingency"] - done
+    assert ev["calls"]["statics"] == all_["calls"]["statics"] - len(lines)
     assert (tmp_path / "cut" / "plan.yaml").read_text() == (
         tmp_path / "whole" / "plan.yaml").read_text()
 
@@ -197,7 +293,8 @@ def test_no_plan_from_the_whole_catalogue(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra", [["--target", "0"], ["--target", "1"], ["--target", "1.5"],
-                                   ["--budget", "0"],
+                                   ["--target", "-0.5"], ["--target", "nan"],
+                                   ["--budget", "0"], ["--budget", "-3"], ["--population", "1"],
                                    ["--bags", "no_such_bag"], ["--points", "5..2"],
                                    ["--span", "20,10"], ["--objectives", "cost"],
                                    ["--bags", ","], ["--count", "3", "--over", "2..4"],

@@ -146,14 +146,60 @@ def test_a_single_failure_hint_asks_only_for_what_was_not_searched(pipe):
     assert "another bag than enclosed_10t (--bags)" in hint
 
 
+def _asked(hint: str, option: str) -> list[float]:
+    """The values a hint suggests for ``option`` (``e.g. --speeds 0.1``)."""
+    import re
+
+    return [float(v) for v in re.findall(rf"e\.g\. {option} ([0-9.]+)", hint)]
+
+
 def test_a_nominal_hint_does_not_ask_for_speeds_or_valves_already_searched(pipe):
+    """No plan stopped by the nominal ascent: the hint names the planned ascent speeds and
+    dump valves searched, as tried, and suggests only a speed below the slowest and a valve
+    above the largest of them (before: 'a slower planned ascent (--speeds)' beside a search
+    of 0.2 m/s alone, nothing named; or nothing at all once two speeds were searched)."""
     rows = [_row(30, "nominal", "ascent velocity: p8 rose faster")]
     fixed = " ".join(report.no_plan(rows, make_space(pipe, models=["enclosed_10t"]))
                      ["what_would_change_it"])
-    assert "(--speeds)" in fixed and "(--dump-valve)" in fixed
+    assert pipe.control.ascent_speed_m_s == 0.2  # the space's one speed, the scenario's
+    assert "tried: planned ascent speed 0.2 m/s and dump valve 1 x" in fixed
+    assert _asked(fixed, "--speeds") == [0.1] and _asked(fixed, "--dump-valve") == [2.0]
     wide = " ".join(report.no_plan(rows, make_space(pipe, models=["enclosed_10t"],
-                                                    speeds=[0.1, 0.2],
+                                                    speeds=[0.2, 0.1, 0.3],
                                                     dump_factors=[1.0, 2.0]))
                     ["what_would_change_it"])
-    assert "(--speeds)" not in wide and "(--dump-valve)" not in wide
+    assert "planned ascent speeds 0.1, 0.2, 0.3 m/s and dump valves 1, 2 x" in wide
     assert "searched did not stop it" in wide
+    speeds, dumps = _asked(wide, "--speeds"), _asked(wide, "--dump-valve")
+    assert speeds and all(v < 0.1 for v in speeds), speeds  # none searched, all outside
+    assert dumps and all(f > 2.0 for f in dumps), dumps
+    assert "slower than 0.1 m/s" in wide and "larger than 2 x" in wide
+    assert "slower than 0.2" not in wide and "slower than 0.3" not in wide
+
+
+def test_a_hint_suggests_nothing_past_what_a_scenario_allows(pipe, tmp_path):
+    """The slowest speed a scenario takes (0.001 m/s) and the largest valve factor (100)
+    searched: nothing slower or larger is suggested, and it says so; a scenario whose own
+    purge valve replaces the catalogue's is asked for a larger one of its own (--dump-valve
+    is refused there), as is the salvage study's hint, which names the speeds and margin
+    searched and asks for neither again."""
+    from flexlift.design.space import DUMP_FACTOR_MAX
+
+    rows = [_row(30, "nominal", "ascent velocity: p8 rose faster"),
+            _row(31, "salvage", "P(unsafe) 0.05")]
+    edge = report.no_plan(rows, make_space(pipe, models=["enclosed_10t"],
+                                           speeds=[0.001, 0.2],
+                                           dump_factors=[1.0, DUMP_FACTOR_MAX]))
+    nominal, salvage = edge["what_would_change_it"]
+    assert not _asked(nominal, "--speeds") and not _asked(nominal, "--dump-valve")
+    assert "no slower speed or larger valve is allowed" in nominal
+    assert "tried: planned ascent speeds 0.001, 0.2 m/s, up to 12 bags over" in salvage
+    assert not _asked(salvage, "--speeds") and "e.g. --over 0..18" in salvage
+    own = pipe.with_changes(**{"gas.purge_rate_max_m3_s": 0.5})
+    rows.append(_row(40, "contingency", "unsafe on bag_rupture", "bag_rupture", "breakout"))
+    hints = report.no_plan(rows, make_space(own, models=["enclosed_10t"]), own)[
+        "what_would_change_it"]
+    assert "the scenario's purge valve, 0.5 m3/s" in hints[0]
+    assert "--dump-valve" not in hints[0] and "larger gas.purge_rate_max_m3_s" in hints[0]
+    assert "--dump-valve" not in hints[1] and "(gas.purge_rate_max_m3_s)" in hints[1]
+    assert _asked(hints[2], "--speeds") == [0.1]

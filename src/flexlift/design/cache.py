@@ -5,7 +5,9 @@ line, written by a single ``write`` on a file opened for appending and flushed t
 (a line is there whole or, cut by a kill, is an unreadable last line that is ignored). Each
 line carries the search's identity (what the candidates are evaluated against: the scenario,
 the target, the ladder) and the candidate's key (:meth:`~flexlift.design.space.Candidate.key`);
-a rerun answers a candidate it finds from the line instead of running it again.
+a rerun answers a candidate it finds from the line instead of running it again. The identity
+includes the code (:meth:`flexlift.design.search.Options.identity`): a line written by
+another flexlift is kept in the file but answers nothing (counted as ``stale``).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ class Cache:
         self.identity = identity
         self.entries: dict[str, dict] = {}
         self.hits = 0
+        self.stale = 0  # lines of another identity (another input or code): not answered
         if self.path.is_file():
             for line in self.path.read_text(errors="replace").splitlines():
                 try:
@@ -33,6 +36,8 @@ class Cache:
                     continue
                 if isinstance(row, dict) and row.get("identity") == identity:
                     self.entries[row["key"]] = row["result"]
+                elif isinstance(row, dict):
+                    self.stale += 1
 
     def get(self, key: str) -> dict | None:
         hit = self.entries.get(key)

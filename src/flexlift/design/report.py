@@ -78,8 +78,10 @@ def failed_criteria(rows: list[dict]) -> dict:
     return {"nominal": dict(nominal.most_common()), "contingency": dict(single.most_common())}
 
 
-def no_plan(rows: list[dict], space) -> dict:
-    """What no candidate survived, which criteria broke, and what would change it."""
+def no_plan(rows: list[dict], space, scenario=None) -> dict:
+    """What no candidate survived, which criteria broke, and what would change it: an option
+    the space already searched is named as searched with its values, never asked for again
+    (``scenario``: where the dump valve comes from, when it is the scenario's own)."""
     where = Counter((r.get("rejected") or {}).get("rung") for r in rows)
     checks = Counter(f"{(r.get('rejected') or {}).get('rung')}: "
                      f"{(r.get('rejected') or {}).get('check')}" for r in rows)
@@ -98,15 +100,10 @@ def no_plan(rows: list[dict], space) -> dict:
                 f"reached it (criteria broken, by candidates: {named})")
         if getattr(space, "staged", False) and tuple(space.sequences) == ("own",):
             hint += "; on a staged lift, every bag at once (--sequence own,none)"
-        speeds = tuple(getattr(space, "ascent_speeds", ()))
-        dump = tuple(getattr(space, "dump_valve_factors", (1.0,)))
-        ask = ([] if len(speeds) > 1 else ["a slower planned ascent (--speeds)"]) + (
-            [] if dump and max(dump) > 1.0 else ["a larger dump valve (--dump-valve)"])
-        if ask:
-            hint += "; " + " or ".join(ask) + " against a runaway ascent"
-        else:
-            hint += ("; the planned ascent speeds and dump valves searched did not stop it "
-                     "(see below)")
+        tried, ask = ascent_choices(space, scenario)
+        hint += f"; tried: {tried}; the speeds and valves searched did not stop it"
+        hint += ("; outside them, against a runaway ascent: " + " or ".join(ask) if ask else
+                 "; no slower speed or larger valve is allowed")
         hints.append(hint)
     if where.get("contingency"):
         kinds = ", ".join(f"{k}: {v}" for k, v in broke["contingency"].items())
@@ -116,18 +113,74 @@ def no_plan(rows: list[dict], space) -> dict:
             hint += ("; incomplete: the run ended before the lift finished after the loss (it "
                      "never separated, or its hold was cut short): a larger breakout pull "
                      "(--pulls) or more bags (--over), or a longer simulation.duration_s")
-        hint += _searched(space)
+        hint += _searched(space, scenario)
         hints.append(hint)
     if where.get("salvage"):
-        hints.append("a slower planned ascent (--speeds) or more margin (--over): the salvage "
-                     "study's P(unsafe) bound stays above the target")
+        tried, ask = ascent_choices(space, scenario, valves=False)
+        over = getattr(space, "over", None)
+        if getattr(space, "count", None) is not None:
+            tried += f", {space.count} bags at each lift point (--count)"
+            ask.append(f"more bags at each lift point than {space.count} (--count)")
+        elif over is not None:
+            tried += f", up to {over[1]} bags over the fewest that lift"
+            ask.append(f"more margin than {over[1]} bags over the fewest (e.g. --over "
+                       f"{over[0]}..{over[1] + max(2, over[1] // 2)})")
+        hints.append(f"the salvage study's P(unsafe) bound stays above the target for all "
+                     f"{where['salvage']} candidates that reached it; tried: {tried}"
+                     + ("; outside them: " + " or ".join(ask) if ask else ""))
     return {"rejected_at": dict(where), "checks": dict(checks.most_common(8)),
             "criteria": broke,
             "what_would_change_it": hints or ["a wider search (--budget, --over, --points)"],
             "best_candidates": climbed(rows, 5)}
 
 
-def _searched(space) -> str:
+def _limit(name: str, bound: str) -> float:
+    """The bound (``ge`` or ``le``) of the scenario's ``control.<name>`` (its schema)."""
+    from flexlift.scenario.schema import Control
+
+    return next(getattr(m, bound) for m in Control.model_fields[name].metadata
+                if hasattr(m, bound))
+
+
+def ascent_choices(space, scenario=None, valves: bool = True) -> tuple[str, list[str]]:
+    """The planned ascent speeds and dump valves the space searched, as words (``tried``),
+    and what lies outside them, each with its option and a value to try (``ask``: a speed
+    below the slowest searched, half of it; a valve above the largest, twice it); nothing
+    beyond what a scenario allows (the schema's slowest speed, a factor of
+    :data:`~flexlift.design.space.DUMP_FACTOR_MAX`)."""
+    from flexlift.design.space import DUMP_FACTOR_MAX
+
+    speeds = sorted(set(getattr(space, "ascent_speeds", ()) or ()))
+    tried, ask = [], []
+    if speeds:
+        tried.append(f"planned ascent speed{'s' if len(speeds) > 1 else ''} "
+                     + ", ".join(f"{v:g}" for v in speeds) + " m/s")
+        slowest = _limit("ascent_speed_m_s", "ge")
+        if speeds[0] > slowest:
+            ask.append(f"a planned ascent slower than {speeds[0]:g} m/s (e.g. --speeds "
+                       f"{max(slowest, float(f'{speeds[0] / 2:.2g}')):g})")
+    if not valves:
+        return ", ".join(tried), ask
+    own = None
+    if scenario is not None:
+        from flexlift.scenario.valves import purge_given
+
+        if purge_given(scenario):
+            own = float(scenario.gas.purge_rate_max_m3_s)
+    dumps = sorted(set(getattr(space, "dump_valve_factors", (1.0,)) or (1.0,)))
+    if own is not None:  # it replaces every catalogue valve: a factor is refused
+        tried.append(f"the scenario's purge valve, {own:g} m3/s (gas.purge_rate_max_m3_s)")
+        ask.append(f"a larger gas.purge_rate_max_m3_s than {own:g} m3/s")
+    else:
+        tried.append(f"dump valve{'s' if len(dumps) > 1 else ''} "
+                     + ", ".join(f"{f:g}" for f in dumps) + " x the catalogue bag's")
+        if dumps[-1] < DUMP_FACTOR_MAX:
+            ask.append(f"a dump valve larger than {dumps[-1]:g} x (e.g. --dump-valve "
+                       f"{min(DUMP_FACTOR_MAX, 2 * dumps[-1]):g})")
+    return " and ".join(tried), ask
+
+
+def _searched(space, scenario=None) -> str:
     """What the space left fixed (each one a change to try: its option) and what it already
     varied without a plan (not to be asked for again)."""
     untried, tried = [], []
@@ -141,7 +194,11 @@ def _searched(space) -> str:
         "compressor supplies " + ", ".join("auto" if v is None else f"{v:g}" for v in supplies)
         if len(supplies) > 1 else "a second or larger supply (--supply)")
     dump = tuple(getattr(space, "dump_valve_factors", (1.0,)))
-    if max(dump) > 1.0:
+    from flexlift.scenario.valves import purge_given
+
+    if scenario is not None and purge_given(scenario):  # --dump-valve is refused then
+        untried.append("a larger purge valve (gas.purge_rate_max_m3_s)")
+    elif max(dump) > 1.0:
         tried.append(f"dump valves up to {max(dump):g} x")
     else:
         untried.append("a larger dump valve (--dump-valve)")
@@ -352,8 +409,10 @@ def write(folder: Path, summary: dict, rows: list[dict]) -> None:
     parts.append(f"<h2>Evaluations</h2><p>{ev['candidates']} candidates ({ev['distinct']} "
                  "distinct); reached each rung: " + ", ".join(
                      f"{RUNG_TEXT[k]} {v}" for k, v in ev["reached"].items())
-                 + f"; answered from the cache: {ev['cache_hits']}; "
-                 f"{summary['elapsed_s']:.0f} s.</p>")
+                 + f"; answered from the cache: {ev['cache_hits']}"
+                 + (f" (its {ev['cache_stale']} evaluations by another flexlift code "
+                    "answered none: re-run)" if ev.get("cache_stale") else "")
+                 + f"; {summary['elapsed_s']:.0f} s.</p>")
     write_text(folder / "report.html", "<!doctype html><html><head><meta charset='utf-8'>"
                "<title>flexlift design</title></head><body>" + "\n".join(parts)
                + "</body></html>\n")

@@ -37,8 +37,8 @@ def run_design(scenario, space: Space, options: Options, out, engine=None, progr
 
     check_options(options, space)
     t0 = time.perf_counter()
-    identity = options.identity(scenario, space)
-    with incremental_folder(out, COMMAND, identity) as inc:
+    identity = options.identity(scenario, space)  # the cache's: the input and the code
+    with incremental_folder(out, COMMAND, options.folder_identity(scenario, space)) as inc:
         inc.claim(*FILES)
         engine = engine or (make_engine() if RUNGS.index(options.up_to) >= 2 else None)
         try:
@@ -116,8 +116,9 @@ def summarise(scenario, space, options, found, own, elapsed: float) -> dict:
         "evaluations": {"candidates": len(rows), "distinct": len({r["candidate_key"]
                                                                   for r in rows}),
                         "reached": reached, "calls": found["calls"],
-                        "cache_hits": found["cache_hits"]},
-        "no_plan": None if best else report.no_plan(rows, space),
+                        "cache_hits": found["cache_hits"],
+                        "cache_stale": found["cache_stale"]},
+        "no_plan": None if best else report.no_plan(rows, space, scenario),
         "not_assessed": (None if options.up_to == "salvage" else
                          f"the search stopped at the {options.up_to} rung: what comes after it "
                          "(" + ", ".join(RUNGS[RUNGS.index(options.up_to) + 1:]) + ") was not "

@@ -45,17 +45,37 @@ class Options:
     study_seed: int = 0
     batch: bool = True
 
-    def identity(self, scenario, space: Space) -> str:
-        """What every evaluation depends on, as text (the cache's identity)."""
-        import hashlib
-        import json
+    def _input(self, scenario, space: Space) -> dict:
+        return {"scenario": scenario.checksum(), "span": space.span_m,
+                "entries": space.entries, "target": self.target, "up_to": self.up_to,
+                "tolerant": self.tolerant, "kinds": self.kinds, "samples": self.samples,
+                "block": self.block, "study_seed": self.study_seed}
 
-        parts = {"scenario": scenario.checksum(), "span": space.span_m,
-                 "entries": space.entries, "target": self.target, "up_to": self.up_to,
-                 "tolerant": self.tolerant, "kinds": self.kinds, "samples": self.samples,
-                 "block": self.block, "study_seed": self.study_seed}
-        return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()
-                              ).hexdigest()[:20]
+    def folder_identity(self, scenario, space: Space) -> str:
+        """What the search is of (the output folder's identity): its input alone, so that a
+        rerun after a change to flexlift continues the folder (and re-runs its candidates:
+        :meth:`identity`) rather than refusing it."""
+        return _digest(self._input(scenario, space))
+
+    def identity(self, scenario, space: Space) -> str:
+        """What every evaluation depends on, as text (the cache's identity): the input, and
+        the code that evaluates it: ``flexlift.__version__`` and the digest of the package's
+        source (:func:`flexlift.plumbing.source.code_digest`; the version alone stays 0.1.0
+        across changes). Another code answers no candidate from the cache
+        (docs/theory/design.md#resume)."""
+        from flexlift import __version__
+        from flexlift.plumbing.source import code_digest
+
+        return _digest({**self._input(scenario, space), "flexlift": __version__,
+                        "code": code_digest()})
+
+
+def _digest(parts: dict) -> str:
+    import hashlib
+    import json
+
+    return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()
+                          ).hexdigest()[:20]
 
 
 def check_options(o: Options, space: Space) -> None:
@@ -301,6 +321,7 @@ def run_search(scenario, space: Space, options: Options, engine, cache: Cache,
         if progress is not None:
             progress(len(rows), options.budget, sum(r["passed"] for r in rows))
     return {"rows": rows, "calls": ev.calls, "cache_hits": cache.hits,
+            "cache_stale": cache.stale,
             "elapsed_s": time.perf_counter() - t0, "evaluator": ev}
 
 

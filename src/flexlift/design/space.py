@@ -36,6 +36,8 @@ from flexlift.scenario import catalogue
 #: the variables of a candidate, in the order the optimiser asks for them
 VARIABLES = ("model", "points", "internal", "over", "mode", "ascent_speed_m_s",
              "breakout_pull_t", "dump_valve_factor", "supply_free_air_m3_min", "sequence")
+#: the largest dump-valve factor on the catalogue bag's valve (--dump-valve)
+DUMP_FACTOR_MAX = 100.0
 #: the staging choices: the scenario's own ``control.sequence``, or none (every bag at once)
 SEQUENCES = ("own", "none")
 #: the parts added after the first caches: left out of the key at these values, so that a
@@ -193,9 +195,9 @@ def _check_choices(scenario, space: Space) -> None:
                 parts = str(exc).split(": ", 2)  # "<source>: <key> = <value>: <allowed>"
                 raise InputError(name, v, f"{key}: {parts[-1]}") from None
     for f in space.dump_valve_factors:
-        if not (isinstance(f, (int, float)) and 0.0 < f <= 100.0):
+        if not (isinstance(f, (int, float)) and 0.0 < f <= DUMP_FACTOR_MAX):
             raise InputError("--dump-valve", f, "a factor on the catalogue bag's dump-valve "
-                             "capacity, 0 < factor <= 100")
+                             f"capacity, 0 < factor <= {DUMP_FACTOR_MAX:g}")
     from flexlift.scenario.valves import purge_given
 
     if any(f != 1.0 for f in space.dump_valve_factors) and purge_given(scenario):
