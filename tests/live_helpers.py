@@ -164,3 +164,16 @@ sensors:
   purge: {at: [bag_1, bag_2, bag_3, bag_4], rate_Hz: 1.0}
   supply_pressure: null
 """
+
+#: every sensor at 10 Hz, the configuration the master is measured safe with
+#: (docs/reference/live.md#what-it-achieves; benchmarks/live_network.py's TANKER_SENSORS)
+SENSORS_10HZ = """
+sensors:
+  seed: 3
+  depth: {rate_Hz: 10, noise_m: 0.02, latency_s: 0.2}
+  pitch: {at: [hull], rate_Hz: 10}
+  sling_force: {rate_Hz: 10, noise_N: 5000.0, latency_s: 0.1, dropout: 0.02}
+  fill_flow: null
+  purge: {at: [bag_1, bag_2, bag_3, bag_4], rate_Hz: 10}
+  supply_pressure: null
+"""

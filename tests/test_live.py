@@ -1,7 +1,9 @@
 """Live operation through a real Mosquitto (issue 42): the master controller driving the rig
-with the broker restarted midway and hostile messages; ``kill -9`` of live and its log read
-back; ``live --rig`` on the embedded broker end to end. (The tanker lifted safe by the master
-via the rig is not tested: it is not achieved, docs/reference/live.md#what-it-achieves.)"""
+with the broker restarted midway and hostile messages; the master lifting a short variant of
+the tanker through the rig to its end, safe as its simulation (the full tanker through
+Mosquitto is benchmarks/live_network.py's ``master`` case:
+docs/reference/live.md#what-it-achieves); ``kill -9`` of live and its log read back; ``live
+--rig`` on the embedded broker end to end."""
 
 import json
 import os
@@ -14,7 +16,7 @@ from importlib.resources import files
 
 import paho.mqtt.client as mqtt
 import pytest
-from live_helpers import SENSORS, mosquitto, wait_until  # noqa: F401 - the fixture
+from live_helpers import SENSORS, SENSORS_10HZ, mosquitto, wait_until  # noqa: F401 - the fixture
 
 #: the rig's speed in the tests (times real time)
 SPEED = 100.0
@@ -309,3 +311,127 @@ def test_live_serves_the_dashboard_with_the_lift_as_read(tmp_path):
     port = urllib.parse.urlsplit(url).port
     with pytest.raises(OSError), socket.create_connection(("127.0.0.1", port), timeout=1):
         pass  # the dashboard stopped with live
+
+
+
+#: the short tanker's changes to the built-in tanker (``_short_tanker``)
+SHORT_TANKER = (("water_depth_m: 350.0", "water_depth_m: 70.0"),
+                ("target_height_m: 300.0", "target_height_m: 20.0"),
+                ("breakout_time_s: 400.0", "breakout_time_s: 20.0"),
+                ("hold_time_s: 600.0", "hold_time_s: 30.0"),
+                ("duration_s: 6000.0", "duration_s: 600.0"),
+                ("output_interval_s: 1.0", "output_interval_s: 0.1"))
+#: the rig's speed for the short tanker's whole lift (times real time)
+LIFT_SPEED = 10.0
+#: the plant's peak ascent speed through the network against the simulation's: within this
+#: fraction; its peak pitch within :data:`LIFT_PITCH_DEG` (the test's docstring says why not
+#: the issue's 10 %)
+LIFT_SPEED_TOLERANCE = 0.3
+LIFT_PITCH_DEG = 0.5
+
+
+def _short_tanker(tmp_path):
+    """The tanker, shortened so that its whole lift fits the suite: raised 20 m from 70 m of
+    water (not 300 m from 350 m: the same 50 m of water above the target, so the gas expands
+    at the end as in the full lift), the seabed's hold decaying twenty times faster
+    (``breakout_time_s`` 20 s, not 400 s: separation at about 130 s, not 1,860 s), the target
+    held 30 s (not 600 s), at most 600 s; every sensor at 10 Hz (``SENSORS_10HZ``). Its
+    coordinated simulation: safe, the target held at 330 s, 0.208 m/s and 0.219 deg at most
+    (the full tanker's: 0.208 m/s, 0.214 deg)."""
+    text = (files("flexlift.scenarios") / "tanker.yaml").read_text()
+    for old, new in SHORT_TANKER:
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / "short-tanker-live.yaml"
+    path.write_text(text + SENSORS_10HZ)
+    return path
+
+
+def test_master_through_mosquitto_lifts_the_short_tanker_safe_as_its_simulation(
+        mosquitto, tmp_path):  # noqa: F811
+    """The master controller on the network's readings drives the rig through a real
+    Mosquitto from the first fill to the lift's end (the rig's plant ended by the target
+    held): outcome safe, as the coordinated simulation of the same scenario, at its time;
+    live's own heights at the target; the plant's peak ascent speed within
+    ``LIFT_SPEED_TOLERANCE`` of the simulation's and its peak pitch within ``LIFT_PITCH_DEG``.
+
+    A variant of the tanker (``_short_tanker``: 330 s of lift, about 35 s of this machine at
+    10x): the full tanker's 3,450 s would take minutes at the speeds the chain holds here; it
+    is benchmarks/live_network.py's ``master`` case (10 % its goal, at ``--speed 4``).
+
+    Why not 10 % here: at speed the network's time counts ``LIFT_SPEED`` times. The rig obeys
+    a command at the first control period (10 ms of wall time at 10x) after it arrives, and
+    the round trip (readings to Mosquitto, live's next period, the command back) takes
+    about that on two shared cores: measured, the commands took effect 0.1 s of lift time
+    after their stamp at the median, 0.3 s at p95, 0.4 s at p99, 0.6 to 0.8 s at most (at 5x:
+    0.01, 0.2, 0.3, 0.33 s; on a real lift, at 1x, a 100 ms period holds the round trip).
+    The laws tolerate 0.3 s of lateness in the speed, not 0.6 s (docs/reference/live.md
+    #what-it-achieves). So the lift stays safe at 10x but its peaks spread: in twelve runs
+    at 8 to 10x (this variant and a longer one) the speed came 3 to 19 % above the
+    simulation's and the pitch 35 % below to 100 % above it (0.14 to 0.44 deg, against a
+    15 deg limit); at 5x both were within 10 % (67 s of wall time); at 20x the lift ran
+    away (3.3 m/s, 30 deg)."""
+    pytest.importorskip("flexlift.sensors.tap")
+    from flexlift import load_scenario
+    from flexlift.ascent.loop import simulate
+    from flexlift.live.broker import parse_broker
+    from flexlift.live.log import LiveLog, read_table
+    from flexlift.live.mqtt import Link
+    from flexlift.live.rig import Rig
+    from flexlift.live.session import Live
+
+    scenario = load_scenario(_short_tanker(tmp_path))
+    sim = simulate(scenario, control="coordinated", summary_only=True)
+    assert sim.outcome["kind"] == "safe", sim.outcome  # the variant itself: safe, arrived
+    duration = scenario.simulation.duration_s
+    assert sim.headline["end_time_s"] < duration - 100.0, "ended by the target held"
+    address = parse_broker(mosquitto.url)
+    rig = Rig(scenario, Link(address, ["flexlift/tk/command/#"], "rig"), "tk",
+              speed=LIFT_SPEED)
+    link = Link(address, ["flexlift/tk/sensor/#"], "live")
+    assert link.start() and rig.link.start()
+    log = LiveLog(tmp_path / "live.sqlite", {"lift": "tk"})
+    said = []
+    live = Live(scenario, link, log, "tk", "master", said.append, periods=rig.periods())
+    stop, rig_done = threading.Event(), threading.Event()
+    wall_limit = 2.0 * duration / LIFT_SPEED  # the rig's plant ends by 600 s of lift
+
+    def run_rig():
+        try:
+            rig.run(stop, wall_limit)
+        finally:
+            rig_done.set()
+
+    thread = threading.Thread(target=run_rig)
+    started = time.monotonic()
+    thread.start()
+    try:
+        outcome = live.run(duration, stop, wall_limit=wall_limit + 15.0,
+                           source_ended=rig_done)
+    finally:
+        stop.set()
+        thread.join(30)
+        link.stop()
+        rig.link.stop()
+        log.close()
+    wall = time.monotonic() - started
+    assert not thread.is_alive()
+    plant, h, target = rig.result, rig.result.headline, scenario.control.target_height_m
+    print(f"short tanker at {LIFT_SPEED:g}x through Mosquitto: {wall:.1f} s wall, rig lag "
+          f"{rig.lag_s:.2f} s, {outcome.readings} readings, {outcome.commands} commands "
+          f"({rig.applied} applied); plant {plant.outcome['kind']} at {h['end_time_s']} s, "
+          f"{h['max_ascent_velocity_ms']} m/s, {h['max_pitch_deg']} deg; simulation "
+          f"{sim.headline['end_time_s']} s, {sim.headline['max_ascent_velocity_ms']} m/s, "
+          f"{sim.headline['max_pitch_deg']} deg")
+    assert outcome.reason == "rig_ended", (outcome.reason, wall, said[-5:])
+    assert plant.outcome["kind"] == "safe", (plant.outcome, said[-5:])
+    assert h["end_time_s"] == pytest.approx(sim.headline["end_time_s"], abs=20.0)
+    assert all(abs(z - target) <= scenario.limits.arrival_tolerance_m
+               for z in live.master.heights().values()), live.master.heights()
+    assert h["max_ascent_velocity_ms"] == pytest.approx(
+        sim.headline["max_ascent_velocity_ms"], rel=LIFT_SPEED_TOLERANCE)
+    assert h["max_pitch_deg"] == pytest.approx(sim.headline["max_pitch_deg"],
+                                               abs=LIFT_PITCH_DEG)
+    commands = read_table(tmp_path / "live.sqlite", "commands")
+    assert outcome.commands == len(commands) > 100 and rig.repeats == 0
+    assert 0.99 * len(commands) <= rig.applied <= len(commands), "the rig obeyed them"
