@@ -230,3 +230,22 @@ def test_the_signatures_name_the_kind():
     assert _synthetic({("b", "fill_flow"): filling}) == [("fill_valve_stuck_open", "b")]
     assert _synthetic({("a", "depth"): ramp}) == [("sensor_drift", "a")]
     assert _synthetic({("a", "depth"): ramp, ("b", "depth"): ramp}) == []
+
+
+def test_a_controllers_short_fills_are_not_a_stuck_valve_a_lasting_one_is():
+    """docs/theory/fault-detection.md#persistence: fills of two seconds in every five, far
+    beyond the meter's noise (the lift's controller topping its bags up where the members
+    did not), flag the fill flow's CUSUM but never name a fill valve stuck open; the same
+    flow lasting is named, once it has filled most of the 30 s span, not before."""
+    from flexlift.estimate.detect import PERSIST_S
+
+    pulses = lambda k, m: 0.5 if k % 5 < 2 else 0.0  # noqa: E731
+    assert _synthetic({("b", "fill_flow"): pulses}, seconds=200) == []
+    lasting = lambda k, m: 0.5  # noqa: E731
+    assert _synthetic({("b", "fill_flow"): lasting}, seconds=200) == \
+        [("fill_valve_stuck_open", "b")]
+    # named once most of the span is of the fault (at 10 s; 26 of the 30 readings beyond
+    # the reference: about 24 s, the readings before it being noise), and within the span
+    assert _synthetic({("b", "fill_flow"): lasting}, seconds=10 + int(0.7 * PERSIST_S)) == []
+    assert _synthetic({("b", "fill_flow"): lasting}, seconds=10 + int(PERSIST_S) + 1) == \
+        [("fill_valve_stuck_open", "b")]

@@ -7,7 +7,7 @@ import math
 from collections import deque
 
 import numpy as np
-from scipy.stats import norm
+from scipy.stats import binom, norm
 
 from flexlift.estimate.detect_stats import (
     Cusum,
@@ -55,6 +55,7 @@ class Track:
         self.silent_since: float | None = None
         self.silent_p = 1.0
         self.window: deque = deque(maxlen=WINDOW)  # (t, z, mean, std)
+        self._persist_k: dict[int, int] = {}  # readings in the span -> those needed
 
     @property
     def faulty(self) -> bool:
@@ -125,6 +126,23 @@ class Track:
         if not e:
             return False
         return self.flag * float(np.mean(e)) > self.cusum.nu + self.z_standing / math.sqrt(len(e))
+
+    def persistent(self, now: float, span_s: float) -> bool:
+        """Whether the current flag has lasted: of the ``n`` readings of the last ``span_s``
+        before ``now``, at least ``k`` lie beyond the CUSUM's reference on the flag's side, the
+        least ``k`` that noise alone (each beyond with probability ``1 - Phi(nu)``) reaches no
+        more often than the sensor's false-alarm budget per sample (a binomial sign test).
+        A fault that lasts passes it once its readings fill the span; a deviation of a few
+        seconds in it (a controller's short fill the members did not give) does not, however
+        large (docs/theory/fault-detection.md#persistence)."""
+        if self.flag == 0:
+            return False
+        e = [(z - m) / sd for t, z, m, sd in self.window if t > now - span_s + 1e-9]
+        n = len(e)
+        if n not in self._persist_k:
+            p = float(norm.sf(self.cusum.nu))
+            self._persist_k[n] = int(binom.isf(self.per_sample, n, p)) + 1 if n else 1
+        return sum(self.flag * x > self.cusum.nu for x in e) >= self._persist_k[n] > 0 and n > 0
 
     def moved(self, side: int, since: float) -> bool:
         """Whether the innovations since ``since`` [s] lean to ``side`` beyond noise: their

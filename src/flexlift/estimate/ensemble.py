@@ -5,7 +5,9 @@ Each member is an :class:`~flexlift.ascent.loop.Ascent` of the scenario on the o
 built for all of them (``prepare(..., plant=plant)``); the members differ only in what is
 unknown: the submerged weight (a factor on the plant's wet-weight records, which each member
 holds its own copy of), the holding force left (``state.H``), each bag's gas
-(``state.n``) and each bag's leak rate (``switches.leak``, [1/s]: a ruptured bag's escape).
+(``state.n``), each bag's leak rate (``switches.leak``, [1/s]: a ruptured bag's escape) and,
+once separated, when the lift separated (the member's clock: its controllers' reference and
+the seabed's release start there; docs/theory/estimation.md#clock).
 All members advance together, one compiled call per chunk
 (:func:`flexlift.ascent.batch.advance_batch`). Their state is read into and written from
 columns of named parts (:data:`PARTS`) for the filter's update.
@@ -26,8 +28,9 @@ from flexlift.ascent.loop import Ascent, prepare
 from flexlift.ascent.plant import coupled_plant
 
 #: the parts of a member's column, in order: the loop's state fields (modal coordinates and
-#: rates, gas [mol], holding force [N]), the leak rates [1/s] and the weight factor [-]
-PARTS = ("q", "v", "n", "H", "leak", "weight")
+#: rates, gas [mol], holding force [N]), the leak rates [1/s], the weight factor [-] and the
+#: clock: the shift of the member's separation time from when it separated by itself [s]
+PARTS = ("q", "v", "n", "H", "leak", "weight", "clock")
 
 
 @dataclass(frozen=True)
@@ -86,6 +89,12 @@ class Ensemble:
         for run in self.runs:
             run.records = _own_weight(run.records)
         self.weight = np.ones(members)
+        #: each member's clock [s]: how far its separation's times (its controllers' and the
+        #: seabed's) have been moved from when it separated by itself (:meth:`release`)
+        self.clock = np.zeros(members)
+        #: the separation time [s] each released member is to be given once it has separated
+        #: (:meth:`settle`); NaN: none pending
+        self._pending = np.full(members, np.nan)
         #: each member's holding force as drawn at the start [N] (m, ng): its hold now less
         #: this is the decay so far, which the timer law makes the same for any start
         self.hold_start = np.zeros((members, self.plant.seabed.H0.size))
@@ -95,7 +104,8 @@ class Ensemble:
         self.ended = [False] * members
         run = self.runs[0]
         self.sizes = {"q": run.state.q.size, "v": run.state.v.size, "n": run.state.n.size,
-                      "H": run.state.H.size, "leak": run.switches.leak.size, "weight": 1}
+                      "H": run.state.H.size, "leak": run.switches.leak.size, "weight": 1,
+                      "clock": 1}
         #: each bag's least spread of gas that resampling leaves [m^3 at the bag's pressure]
         #: (the estimator sets it: what one load-cell reading cannot tell apart); 0: none
         self.gas_floor_m3 = np.zeros(run.state.n.size)
@@ -138,6 +148,7 @@ class Ensemble:
     def advance(self, until: int) -> None:
         """Every member to step ``until`` (exclusive) together."""
         self.ended = advance_batch(self.runs, until, self.ended)
+        self.settle()
 
     def valve_noise(self, spread: float, rng: np.random.Generator) -> None:
         """Every member's gas moved by its valves' own inaccuracy since the last call
@@ -148,7 +159,7 @@ class Ensemble:
         """The members' columns (n, m) in the order of :data:`PARTS`."""
         return np.column_stack([np.concatenate([
             run.state.q, run.state.v, run.state.n, run.state.H, run.switches.leak,
-            [self.weight[i]]]) for i, run in enumerate(self.runs)])
+            [self.weight[i]], [self.clock[i]]]) for i, run in enumerate(self.runs)])
 
     def write(self, X: np.ndarray) -> None:
         """The members set from columns ``X`` (after the filter's update): gas, holding force
@@ -162,6 +173,7 @@ class Ensemble:
             run.switches.leak[:] = np.maximum(parts["leak"], 0.0)
             self.weight[i] = max(float(parts["weight"][0]), 0.05)
             self._set_weight(i)
+            self._shift(i, float(parts["clock"][0]) - self.clock[i])
             run.end_held_block()
 
     def resample(self, log_weights: np.ndarray, rng: np.random.Generator,
@@ -188,7 +200,8 @@ class Ensemble:
         shrink = (3.0 * discount - 1.0) / (2.0 * discount)
         spread = math.sqrt(1.0 - shrink**2)
         n = np.array([run.state.n for run in self.runs])  # (m, nb)
-        kernels = {"weight": _kernel(self.weight, w), "n": _kernel(n, w)}
+        kernels = {"weight": _kernel(self.weight, w), "n": _kernel(n, w),
+                   "clock": _kernel(self.clock, w)}
         # weights on one member leave no spread to draw from: never less than the members'
         # own spread before (unweighted), up to the gas a load cell cannot tell apart
         # (gas_floor_m3, as moles at the members' mean pressure): the members keep what
@@ -203,6 +216,7 @@ class Ensemble:
         chosen = _systematic(w * (1.0 + 1e-12), rng)
         seen: set[int] = set()
         runs, weight, ended = [], np.empty(self.m), []
+        clock, pending = np.empty(self.m), self._pending[chosen.astype(int)]
         # each parent's decay of its hold so far, before any slot's draw moves its hold
         decay = self.hold_start - np.array([run.state.H for run in self.runs])
         hold_start = np.empty_like(self.hold_start)
@@ -216,6 +230,12 @@ class Ensemble:
             weight[slot] = max(shrink * self.weight[j] + (1.0 - shrink) * mean
                                + spread * sd * rng.standard_normal(), 0.05)
             hold_start[slot] = self.held_draw(run, decay[j], rng)
+            mean, sd = kernels["clock"]  # a separated member's clock parts as its gas does
+            clock[slot] = self.clock[j]
+            if separated(run):
+                clock[slot] = shrink * self.clock[j] + (1.0 - shrink) * mean \
+                    + spread * sd * rng.standard_normal()
+                shift_clock(run, clock[slot] - self.clock[j])
             mean, sd = kernels["n"]
             run.state.n[:] = np.maximum(shrink * n[j] + (1.0 - shrink) * mean
                                         + spread * sd * rng.standard_normal(n.shape[1]), 0.0)
@@ -223,6 +243,7 @@ class Ensemble:
             runs.append(run)
             ended.append(self.ended[j])
         self.runs, self.weight, self.ended, self.hold_start = runs, weight, ended, hold_start
+        self.clock, self._pending = clock, pending
         self._flows = accounts(self.runs)
         for i in range(self.m):
             self._set_weight(i)
@@ -253,11 +274,24 @@ class Ensemble:
                 H[g] = float(truncnorm.rvs(a, np.inf, loc=mean, scale=sd, random_state=rng))
         return H + decay
 
-    def release(self) -> None:
+    def release(self, between: tuple[float, float] | None = None,
+                rng: np.random.Generator | None = None) -> None:
         """Every member's held groups set to separate at their next step: the hold just below
         the group's uplift (docs/theory/estimation.md#hold: the lift has separated, so its hold
         is below its uplift now; held until now, it was above it a window ago). A group whose
-        uplift is not positive is left held."""
+        uplift is not positive is left held. (Called last in a window: an update of the gas
+        after it, or the valves' noise, could take the uplift back below the hold.)
+
+        ``between`` (t0, t1) [s]: the readings say the lift separated in (t0, t1]
+        (docs/theory/estimation.md#clock); each member is to have separated at its own draw,
+        uniform over it (``rng``), set once it has separated (:meth:`settle`): the members
+        released together would all separate at one moment, later than the lift, and their
+        controllers' references, started there, would bring every one of them to the surface
+        that much late, a forecast of no spread and off."""
+        if between is not None:  # the members still held
+            t0, t1 = between
+            held = np.array([not run.state.sep.any() for run in self.runs])
+            self._pending[held] = rng.uniform(t0, t1, int(held.sum())) if t1 > t0 else t1
         for i, run in enumerate(self.runs):
             for g in np.flatnonzero(~run.state.sep):
                 uplift = _uplift(run, g)
@@ -266,6 +300,21 @@ class Ensemble:
                     self.hold_start[i, g] += below - run.state.H[g]
                     run.state.H[g] = below
             run.end_held_block()
+
+    def settle(self) -> None:
+        """Each released member that has separated since given the separation time drawn for
+        it (:meth:`release`): its clock moved by that time less its own."""
+        for i in np.flatnonzero(np.isfinite(self._pending)):
+            own = separation_time(self.runs[i])
+            if math.isfinite(own):
+                self._shift(i, float(self._pending[i]) - own)
+                self._pending[i] = math.nan
+
+    def _shift(self, i: int, delta: float) -> None:
+        """Member ``i``'s clock moved by ``delta`` [s] (nothing before it has separated)."""
+        if delta != 0.0 and separated(self.runs[i]):
+            shift_clock(self.runs[i], delta)
+            self.clock[i] += delta
 
     def split(self, column: np.ndarray) -> dict[str, np.ndarray]:
         """A column's parts by name."""
@@ -302,6 +351,29 @@ def valve_noise(runs: list[Ascent], since, spread: float, rng: np.random.Generat
         run.state.n[:] = np.maximum(run.state.n + dn * rng.standard_normal(dn.size), 0.0)
         run.end_held_block()
     return now
+
+
+def separated(run: Ascent) -> bool:
+    """Whether any of ``run``'s controllers has noted a separation."""
+    return bool(np.isfinite(run.control_state.t_sep).any())
+
+
+def separation_time(run: Ascent) -> float:
+    """The first separation ``run``'s controllers noted [s] (NaN: none yet)."""
+    t = run.control_state.t_sep
+    return float(np.nanmin(t)) if np.isfinite(t).any() else math.nan
+
+
+def shift_clock(run: Ascent, delta: float) -> None:
+    """``run``'s separation moved by ``delta`` [s]: the times its controllers noted their
+    holds let go and started their references (``t_free``, ``t_sep``), and the times its
+    groups separated, from which the seabed's release runs (``state.release[0]``). Its state
+    now is not moved (a shift of seconds at the start of an ascent moves the lift by
+    millimetres): what moves is what is still to come, on the reference's time line."""
+    cs = run.control_state
+    for a in (cs.t_free, cs.t_sep, run.state.release[0]):
+        a[np.isfinite(a)] += delta
+    run.end_held_block()
 
 
 def _uplift(run: Ascent, g: int) -> float:

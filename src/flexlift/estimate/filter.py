@@ -132,6 +132,8 @@ class Estimator:
         #: or widened): its predictions are not a fault detector's yardstick
         self.lost = False
         self._row = self._row_before = 0  # the first recorded row not yet read
+        #: when the readings said the lift separated, (after, at or before) [s]; None: not yet
+        self.separated: tuple[float, float] | None = None
 
     def assimilate(self, t_end: float, readings) -> list[Prediction]:
         """Advance the members to ``t_end`` [s] and update them with ``readings``
@@ -139,7 +141,7 @@ class Estimator:
         t_end``); returns each reading's prediction."""
         ens = self.ensemble
         ens.advance(int(round(t_end / ens.dt)) + 1)
-        self.t = t_end
+        t_before, self.t = self.t, t_end
         readings = [r for r in readings if r.sensor in self.by_name]
         if not readings:
             ens.valve_noise(self.valve_spread, self.rng)
@@ -155,10 +157,16 @@ class Estimator:
         sigma = np.maximum(noise, floor)
         motion = observed & np.array([q != "sling_force" for q in quantity])
         self.lost = False
+        release = None  # the lift separated while members are held: when [s]
         # the members' own valves' feedback weighs them too (commanded members' valves are
         # the commands, alike in every member: nothing to weigh)
         # (a bag with no dump valve has no opening to predict: NaN, nothing to weigh)
-        feedback = (np.array([q in FEEDBACK for q in quantity]) & (not self.valves)
+        # and only while a member is held: the valves tell when the lift separated; after it
+        # they follow the controller, whose state the motion tells (weighed after it too, a
+        # member released a moment late is chosen by the timing of its valves, not by when it
+        # separated: docs/theory/estimation.md#clock)
+        held = any(not run.state.sep.any() for run in ens.runs)
+        feedback = (np.array([q in FEEDBACK for q in quantity]) & (not self.valves) & held
                     & np.isfinite(Y).all(axis=1))
         if motion.any() or feedback.any():  # the members that explain the readings
             r = (z[motion, None] - Y[motion]) / sigma[motion, None]
@@ -171,8 +179,12 @@ class Estimator:
             depth = np.array([q == "depth" for q in quantity])
             dump = feedback[feedback] & np.array([q == "purge" for q in quantity])[feedback]
             if self._separated_first(f[dump], worst, z[depth, None] - Y[depth]):
-                self.ensemble.release()
-                self.counts.released += 1
+                # the lift separates once: members still held after a release (their
+                # uplift fell below their hold again within the window) are given the
+                # first release's interval, not a later one
+                release = self.separated or self._separated_in(readings, z, Y, sigma,
+                                                               feedback, (t_before, t_end))
+                self.separated = release
             if self.ensemble.resample(log_w, self.rng,
                                       force=bool(worst.any() and not worst.all())):
                 self.counts.resampled += 1
@@ -189,6 +201,9 @@ class Estimator:
             self.counts.updates += 1
         self._command(readings, quantity)
         ens.valve_noise(self.valve_spread, self.rng)  # the window to come's process noise
+        if release is not None and any(not run.state.sep.any() for run in ens.runs):
+            ens.release(release, self.rng)  # last: no change of the gas after it undoes it
+            self.counts.released += 1
         return [Prediction(r.time_s, r.sensor, r.value, float(mean[k]), float(std[k]),
                            bool(used[k])) for k, r in enumerate(readings)]
 
@@ -212,6 +227,20 @@ class Estimator:
             if np.all(np.mean(f**2, axis=0) > OUTLIER**2) and np.all(f.mean(axis=0) > 0):
                 return True
         return bool(lost.all() and rise.size and np.all(rise[:, held].mean(axis=0) < 0))
+
+    def _separated_in(self, readings, z, Y, sigma, feedback, window) -> tuple[float, float]:
+        """When the lift separated, as the readings bound it [s]: after the last reading of a
+        dump valve still shut and at or before the first of one opened (more than
+        :data:`OUTLIER` predicted standard deviations above the members' mean: the valves
+        open at separation), i.e. within one period of that valve's sensor before its first
+        open reading; without such a reading, within the window (docs/theory/estimation.md#clock)."""
+        k = np.flatnonzero(feedback)
+        opened = k[(z[k] - Y[k].mean(axis=1)) / sigma[k] > OUTLIER]
+        if not opened.size:
+            return window
+        first = min(opened, key=lambda j: readings[j].time_s)
+        t1 = readings[first].time_s
+        return t1 - self.sensors[self.by_name[readings[first].sensor]].period_s, t1
 
     def _widen(self, Y, z, sigma, motion) -> np.ndarray:
         """The members' motion spread widened to cover the readings when more than half of
@@ -238,7 +267,8 @@ class Estimator:
         group on the rows it may move (domain localisation, docs/theory/estimation.md#local):
         a bag's load cell its own gas and leak; the depths and inclinometers the motion (the
         weight and the holding force are left to resampling: their effect on the readings is
-        a threshold, separation, not a line). The groups' rows are disjoint, so each group's
+        a threshold, separation, not a line; so is the clock, whose effect on a window's
+        readings is a fraction of a gauge's noise). The groups' rows are disjoint, so each group's
         update leaves the others' predicted readings as they were."""
         ens = self.ensemble
         X = ens.columns()
@@ -268,7 +298,7 @@ class Estimator:
                 broad.append(int(j))
         for b, members in by_bag.items():
             groups.append((np.array([offset["n"] + b, offset["leak"] + b]), np.array(members)))
-        if broad:  # the motion; the weight and the hold by resampling only
+        if broad:  # the motion; the weight, the hold and the clock by resampling only
             groups.append((np.arange(offset["n"]), np.array(broad)))
         return groups
 
