@@ -166,7 +166,8 @@ def test_live_rig_embedded_end_to_end(tmp_path):
 def test_live_with_its_rig_ends_when_the_rig_has_ended(tmp_path):
     """``--until arrived`` with ``--rig``: the rig's plant ends at its scenario's duration
     (150 s, held on the seabed all along); live then reads what is left and ends
-    (``rig_ended``, exit 1: not arrived), not waiting for an arrival that cannot come."""
+    (``rig_ended``, exit 1: not arrived), not waiting for an arrival that cannot come, and
+    not taking the end for its sensors gone silent."""
     pytest.importorskip("flexlift.sensors.tap")
     path = _scenario_file(tmp_path)
     path.write_text(path.read_text().replace("duration_s: 6000.0", "duration_s: 150.0"))
@@ -178,6 +179,8 @@ def test_live_with_its_rig_ends_when_the_rig_has_ended(tmp_path):
     report = json.loads((tmp_path / "out" / "report.json").read_text())
     assert report["lift"]["ended"] == "rig_ended"
     assert 149.0 <= report["lift"]["end_time_s"] <= 150.0  # its last reading's time
+    # an end the rig said is no silent network: no stale readings, no silent alarm
+    assert "readings stale" not in out and "silent" not in report["lift"]["alarms"], out[-2000:]
 
 
 def test_live_refuses_bad_options(tmp_path):
@@ -398,7 +401,7 @@ def test_master_through_mosquitto_lifts_the_short_tanker_safe_as_its_simulation(
 
     def run_rig():
         try:
-            rig.run(stop, wall_limit)
+            rig.run(stop, wall_limit, ended=rig_done)  # as live --rig: said at its end
         finally:
             rig_done.set()
 
@@ -428,6 +431,11 @@ def test_master_through_mosquitto_lifts_the_short_tanker_safe_as_its_simulation(
     assert h["end_time_s"] == pytest.approx(sim.headline["end_time_s"], abs=20.0)
     assert all(abs(z - target) <= scenario.limits.arrival_tolerance_m
                for z in live.master.heights().values()), live.master.heights()
+    # the rig said it ended: its last readings are no silent network (no stale readings,
+    # no silent alarm at the end), and on them live judges the lift arrived
+    assert live.arrived() and not live.stale, (live.stale, said[-5:])
+    assert not [a for a in outcome.alarms if a[1] == "silent" and a[0] >= h["end_time_s"] - 10.0
+                ], [a for a in outcome.alarms if a[1] == "silent"][:5]
     assert h["max_ascent_velocity_ms"] == pytest.approx(
         sim.headline["max_ascent_velocity_ms"], rel=LIFT_SPEED_TOLERANCE)
     assert h["max_pitch_deg"] == pytest.approx(sim.headline["max_pitch_deg"],

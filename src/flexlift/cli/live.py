@@ -242,9 +242,11 @@ def _say_estimate(s: dict) -> None:
 
 
 def _rig_then_say(rig, stop: threading.Event, done: threading.Event) -> None:
-    """The rig's run (``--rig``), then ``done`` set: its plant has ended, so no reading
-    will come again and live ends too (not waiting for an arrival that cannot come)."""
+    """The rig's run (``--rig``), ``done`` set as soon as its plant has ended (before its
+    result is made): no reading will come again and live ends too, on the readings sent
+    (not waiting for an arrival that cannot come, nor taking them for a silent network);
+    set too if the rig fails, so that live ends then."""
     try:
-        rig.run(stop)
+        rig.run(stop, ended=done)
     finally:
         done.set()

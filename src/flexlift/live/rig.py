@@ -78,8 +78,11 @@ class Rig:
                               reading_payload(reading.time_s, reading.value), QOS_READING)
             self.published += 1
 
-    def run_loop(self, stop, wall_limit: float = math.inf) -> None:
-        """Step the plant until its run ends, ``stop`` is set or ``wall_limit`` [s] passes."""
+    def run_loop(self, stop, wall_limit: float = math.inf, ended=None) -> None:
+        """Step the plant until its run ends, ``stop`` is set or ``wall_limit`` [s] passes;
+        then set ``ended`` (a :class:`threading.Event`, or None) at once, before the run's
+        result is made: no reading will come again, and live, told so within its
+        sensors' silence, ends on the readings sent (docs/reference/live.md: Ending)."""
         run, settings = self.ascent, self.ascent.settings
         run.start()
         k_period = settings.k_ctrl
@@ -99,8 +102,10 @@ class Rig:
                 stop.wait(ahead)
             else:
                 self.lag_s = max(self.lag_s, -ahead)
+        if ended is not None:
+            ended.set()
         self.result = run.finish(summary_only=True)
 
-    def run(self, stop, wall_limit: float = math.inf) -> None:
+    def run(self, stop, wall_limit: float = math.inf, ended=None) -> None:
         """The rig's thread: :meth:`run_loop`."""
-        self.run_loop(stop, wall_limit)
+        self.run_loop(stop, wall_limit, ended)

@@ -9,7 +9,9 @@ the messages of one period are read within it (benchmarks/live.py).
 
 Stale readings (a depth or sling force of a controlled bag silent past twice its period, as
 when the rig or the network is gone): every fill valve is commanded shut, the purge valves
-are held where they are, and it is said; control resumes when the readings come back.
+are held where they are, and it is said; control resumes when the readings come back. A rig
+run in this process that has said it ended (``source_ended``) is not a network gone silent:
+its last readings are judged at the moment live was told (:meth:`Live._last`).
 """
 
 from __future__ import annotations
@@ -84,6 +86,7 @@ class Live:
         self.stale = False
         self.stale_periods = 0
         self.arrived_s: float | None = None
+        self._source_ended = False  # the run ended because the rig said it had ended
         self.max_speed, self.max_pitch = 0.0, 0.0
         self._offset = time.time() - time.monotonic()  # monotonic -> POSIX
         self._range: dict[str, str] = {}
@@ -205,6 +208,7 @@ class Live:
         this process has ended: ``rig_ended``, after the readings still queued are read);
         then commit the log."""
         self.epoch = epoch if epoch is not None else time.time()
+        self._source_ended = False
         start = time.monotonic()
         try:
             reason = self._loop(until, stop, start, wall_limit, source_ended)
@@ -212,17 +216,24 @@ class Live:
             reason = "interrupted"
         self.log.commit()
         # (the rig ended: the lift's clock stopped with its last reading)
-        t_end = self.board.t_max if reason == "rig_ended" else self.board.now(time.monotonic())
+        t_end = self.board.t_max if self._source_ended else self.board.now(time.monotonic())
         return Outcome(reason, t_end, self.arrived_s,
                        self.max_speed, self.max_pitch, self.board.count, self.board.late,
                        dict(Counter(self.tally.counts)), self.commands,
                        list(self.alarms.raised), self.stale_periods)
 
-    def _last(self, until, stop) -> str:
-        """The rig has ended: the readings still on their way read (until none has come for
-        :data:`LAST_READINGS_S`, at most :data:`LAST_READINGS_MAX_S`), a last period, and
-        the reason: ``arrived`` if every bag then is at the target and arrival was awaited,
-        else ``rig_ended``."""
+    def _last(self, until, stop, wall_end: float) -> str:
+        """The rig has ended (live saw it at ``wall_end``, monotonic [s]): the readings
+        still on their way read (until none has come for :data:`LAST_READINGS_S`, at most
+        :data:`LAST_READINGS_MAX_S`), a last period at the last reading's time, and the
+        reason: ``arrived`` if every bag then is at the target and arrival was awaited, else
+        ``rig_ended``.
+
+        The last period judges the sensors' silence at ``wall_end``, not after the wait: a
+        rig that has said it ended is no network gone silent, so the readings it sent up to
+        its end are not stale for having stopped since; a sensor already silent at the end
+        (its node, or the broker, gone before the rig ended) is, and then the lift is not
+        taken as arrived."""
         deadline, count = time.monotonic() + LAST_READINGS_MAX_S, -1
         while self.board.count != count and time.monotonic() < deadline:
             count = self.board.count
@@ -231,7 +242,7 @@ class Live:
             self.read()
         t = self.board.t_max  # the last reading's time: the lift's clock stopped with the rig
         if math.isfinite(t):
-            self.period(t, time.monotonic())
+            self.period(t, wall_end)
             if until == "arrived" and self.arrived():
                 self.arrived_s = t
                 return "arrived"
@@ -246,7 +257,8 @@ class Live:
                 reason = "time" if self.board.count else "no_readings"
                 break
             if source_ended is not None and source_ended.is_set():
-                return self._last(until, stop)
+                self._source_ended = True
+                return self._last(until, stop, wall)
             self.read()
             t = self.board.now(time.monotonic())
             if math.isfinite(t) and t >= t_next:
