@@ -249,3 +249,32 @@ def test_a_controllers_short_fills_are_not_a_stuck_valve_a_lasting_one_is():
     assert _synthetic({("b", "fill_flow"): lasting}, seconds=10 + int(0.7 * PERSIST_S)) == []
     assert _synthetic({("b", "fill_flow"): lasting}, seconds=10 + int(PERSIST_S) + 1) == \
         [("fill_valve_stuck_open", "b")]
+
+
+def _purge_only(lift_open, seconds=120):
+    """A bag with a dump-valve feedback only (1 Hz, noise 0.01): the members open it 3 s in
+    every 6; ``lift_open(k)`` is what the lift's reads at second k."""
+    from flexlift.sensors import Reading
+    from flexlift.sensors.config import Sensor
+
+    sensor = Sensor("b", "purge", 1.0, 0.01, 0.0, 0.0)
+    rng = np.random.default_rng(8)
+    det, out = Detector([sensor], ["b"]), []
+    for k in range(seconds):
+        mean = 1.0 if (k // 3) % 2 == 0 else 0.0
+        z = lift_open(k) + rng.normal(0.0, 0.01)
+        out += det.update(Reading(float(k), sensor.name, z), mean, 0.01)
+        out += det.tick(float(k))
+    return [(a.kind, a.bag, a.time_s) for a in out]
+
+
+def test_a_dump_valve_cycled_at_other_moments_is_not_stuck_one_shut_throughout_is():
+    """docs/theory/fault-detection.md#persistence: the lift's controller cycles its dump
+    valve at other moments than the members (out of step by half a cycle: every reading
+    a hundred noise widths off, both ways): no dump valve named stuck; shut throughout while
+    the members open it, it is named, once it has read shut over most of the 30 s span."""
+    out_of_step = lambda k: 1.0 if ((k + 3) // 3) % 2 == 0 else 0.0  # noqa: E731
+    assert _purge_only(out_of_step) == []
+    named = _purge_only(lambda k: 0.0)
+    assert [(kind, bag) for kind, bag, _ in named] == [("dump_valve_stuck_closed", "b")]
+    assert 24.0 <= named[0][2] <= 31.0

@@ -30,9 +30,11 @@ PHYSICAL = ("bag_rupture", "sling_break", "supply_failure", "dump_valve_stuck_cl
 #: the tests per sensor sharing its part of the false-alarm budget
 TESTS_PER_SENSOR = 3
 #: a fill valve is named stuck open only once its flow has stood above the prediction for
-#: most of this span [s] (:meth:`Track.persistent`): the lift's controller tops its bags up in
-#: fills of a few seconds that members a little off do not give; a stuck valve stays open
-#: (a quarter of the issue's 120 s for a stuck valve; docs/theory/fault-detection.md#persistence)
+#: most of this span [s] (:meth:`Track.persistent`), a dump valve stuck shut once it has read
+#: shut all of it (:meth:`Track.read_throughout`): the lift's controller tops its bags up and
+#: cycles its dump valves in bursts of a few seconds that members a little off give at other
+#: moments; a stuck valve stays as it stuck (a quarter of the issue's 120 s for a stuck
+#: valve; docs/theory/fault-detection.md#persistence)
 PERSIST_S = 30.0
 
 
@@ -231,7 +233,8 @@ class Detector:
             return self._alarm(t, "supply_failure", bag, [supply],
                                f"supply pressure at atmospheric, {supply.since_flag()[2] / 1e5:.1f}"
                                " bar expected", ("fill_valve_stuck_closed",))
-        if P < 0 and tracks["purge"].reads(0.0, a):
+        if P < 0 and tracks["purge"].reads(0.0, a) and tracks["purge"].read_throughout(
+                0.0, a, t, PERSIST_S):
             purge = tracks["purge"]
             return self._alarm(t, "dump_valve_stuck_closed", bag, [purge],
                                f"purge shut, {purge.since_flag()[2]:.2f} open expected")

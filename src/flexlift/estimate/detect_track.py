@@ -113,6 +113,21 @@ class Track:
                 n += 1
         return consistent_with(sq, n, alpha)
 
+    def read_throughout(self, value: float, alpha: float, now: float, span_s: float) -> bool:
+        """Whether the readings of the whole last ``span_s`` before ``now`` are of ``value``
+        (as :meth:`reads`), the span covered: its first reading at least 80 % of the span
+        before ``now``. A valve stuck shut reads shut all along; a controller's valve that the
+        members open at other moments than the lift's reads open in between
+        (docs/theory/fault-detection.md#persistence)."""
+        rows = [(t, z, std) for t, z, _m, std in self.window if t > now - span_s + 1e-9]
+        if not rows or now - rows[0][0] < 0.8 * span_s:
+            return False
+        sq = 0.0
+        for _t, z, std in rows:
+            sigma = self.sensor.noise if self.sensor.noise > 0 else std
+            sq += ((z - value) / sigma) ** 2
+        return consistent_with(sq, len(rows), alpha)
+
     def standing(self, now: float, span_s: float) -> bool:
         """Whether the current flag is still fed: the readings of the last ``span_s`` before
         ``now`` lie, on average, beyond the CUSUM's reference on the flag's side (a CUSUM

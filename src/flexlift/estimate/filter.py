@@ -161,12 +161,10 @@ class Estimator:
         # the members' own valves' feedback weighs them too (commanded members' valves are
         # the commands, alike in every member: nothing to weigh)
         # (a bag with no dump valve has no opening to predict: NaN, nothing to weigh)
-        # and only while a member is held: the valves tell when the lift separated; after it
-        # they follow the controller, whose state the motion tells (weighed after it too, a
-        # member released a moment late is chosen by the timing of its valves, not by when it
-        # separated: docs/theory/estimation.md#clock)
-        held = any(not run.state.sep.any() for run in ens.runs)
-        feedback = (np.array([q in FEEDBACK for q in quantity]) & (not self.valves) & held
+        # (after the separation too: weighed only while a member was held, the members'
+        # dump valves cycled out of step with the lift's and two benchmark lifts of four
+        # were lost for hundreds of windows, one to false ruptures; docs/theory/estimation.md#clock)
+        feedback = (np.array([q in FEEDBACK for q in quantity]) & (not self.valves)
                     & np.isfinite(Y).all(axis=1))
         if motion.any() or feedback.any():  # the members that explain the readings
             r = (z[motion, None] - Y[motion]) / sigma[motion, None]
