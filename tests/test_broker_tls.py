@@ -263,7 +263,7 @@ def test_live_and_rig_run_the_lift_over_tls_on_their_accounts(tls_broker, tmp_pa
                         "--user", user, "--password-file", str(out / PASSWORDS / user),
                         "--tls-ca", str(certs.ca), *more)
     rig = run("rig", "rig", "--speed", "100", "--wall-limit", "120")
-    live = run("live", "master", "--out", str(tmp_path / "live"), "--until", "300",
+    live = run("live", "master", "--out", str(tmp_path / "live"), "--until", "200",
                "--no-plan", "--no-dashboard", "--wall-limit", "120")
     try:
         live_out, live_err = live.communicate(timeout=240)
@@ -278,7 +278,7 @@ def test_live_and_rig_run_the_lift_over_tls_on_their_accounts(tls_broker, tmp_pa
     assert f"master on {address.url}" in live_out
     report_text = (tmp_path / "live" / "report.json").read_text()
     report = json.loads(report_text)["lift"]
-    assert report["ended"] == "time" and report["readings"] > 300 * 15 * 0.8
+    assert report["ended"] == "time" and report["readings"] > 200 * 15 * 0.8
     assert report["commands"] > 0 and report["malformed"] == {}
     applied = re.search(r"(\d+) commands applied", rig_out)
     assert applied and int(applied.group(1)) > 0, (rig_out, rig_err[-2000:])

@@ -544,22 +544,24 @@ def test_a_figure_whose_data_do_not_pickle_is_drawn_here_at_once(tmp_path, monke
     assert (tmp_path / "here.png").read_bytes() == (tmp_path / "there.png").read_bytes()
 
 
-def test_every_figure_of_a_run_is_drawn_by_the_figure_processes(tmp_path, monkeypatch):
-    """`flexlift run` on the tanker: with two figure processes every figure's data pickle
-    (none is drawn in the main process) and the 19 PNG files are the bytes one process
-    draws."""
+def test_every_figure_of_a_run_is_drawn_by_the_figure_processes(tmp_path, monkeypatch,
+                                                                tanker_run_folder):
+    """`flexlift run` on the tanker: with two figure processes (conftest's run, shared with
+    test_run) every figure's data pickle (none is drawn in the main process) and the 19 PNG
+    files are the bytes one process draws."""
     from flexlift.cli import main
     from flexlift.output.plots import _style
+
+    two, rc, fallbacks = tanker_run_folder
+    assert rc == 0 and fallbacks == [], fallbacks  # none drawn in the main process
 
     def no_fallback(plot, args, kwargs, path, why):
         raise AssertionError(f"{path.name} drawn in the main process: {why}")
 
     monkeypatch.setattr(_style, "_draw_here", no_fallback)
-    folders = {}
-    for n in ("0", "2"):
-        monkeypatch.setenv(_style.PROCESSES_ENV, n)
-        assert main(["run", "--quiet", "--out", str(tmp_path / n)]) == 0
-        folders[n] = tmp_path / n / "figures"
+    monkeypatch.setenv(_style.PROCESSES_ENV, "0")
+    assert main(["run", "--quiet", "--out", str(tmp_path / "0")]) == 0
+    folders = {"0": tmp_path / "0" / "figures", "2": two / "figures"}
     names = sorted(p.name for p in folders["0"].glob("*.png"))
     assert len(names) == 19
     assert names == sorted(p.name for p in folders["2"].glob("*.png"))

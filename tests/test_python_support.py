@@ -6,6 +6,7 @@ import json
 import os
 import re
 import subprocess
+import time
 import tomllib
 from importlib import metadata
 from pathlib import Path
@@ -128,9 +129,22 @@ def test_a_failed_install_says_so_and_leaves_nothing_running(tmp_path):
         f"{tmp_path / 'absent-0.0-py3-none-any.whl'} --hash=sha256:{'0' * 64}\n")
     (tmp_path / "pyproject.toml").write_text("")
     python = getattr(sys, "_base_executable", sys.executable)
-    done = subprocess.run([str(tmp_path / "dev"), "run"], capture_output=True, text=True,
-                          timeout=60, env={"PATH": "/usr/bin:/bin", "HOME": str(tmp_path),
-                                            "PYTHON": python})
+    dev = subprocess.Popen([str(tmp_path / "dev"), "run"], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True,
+                           env={"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "PYTHON": python})
+    try:
+        dev.wait(60)
+        exited = time.monotonic()
+        # nothing of ./dev (the ticker's sleep) holds its output open after it exits: a
+        # caller reading it to its end (a pipe, $(...)) is not kept waiting
+        stdout, stderr = dev.communicate(timeout=60)
+        closed = time.monotonic() - exited
+    finally:
+        if dev.poll() is None:
+            dev.kill()
+            dev.communicate()
+    done = subprocess.CompletedProcess(dev.args, dev.returncode, stdout, stderr)
+    assert closed < 4.0, f"./dev's output stayed open {closed:.1f} s after it exited"
     assert done.returncode == 1, done.stderr
     assert "pip could not install requirements/run.lock" in done.stderr.strip().splitlines()[-1]
     assert "unbound variable" not in done.stderr

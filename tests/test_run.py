@@ -45,9 +45,9 @@ class _Collect(HTMLParser):
 
 
 @pytest.fixture(scope="module")
-def tanker_run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("run") / "tanker"
-    rc = main(["run", "--out", str(out), "--quiet"])
+def tanker_run(tanker_run_folder):
+    """The tanker's ``flexlift run`` (conftest's, shared with test_figures; read only)."""
+    out, rc, _ = tanker_run_folder
     assert rc == 0
     return out
 

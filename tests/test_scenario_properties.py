@@ -184,7 +184,9 @@ SETTINGS = dict(derandomize=True, database=None, deadline=None,
 
 
 # --------------------------------------------------------------------------- the loader
-@settings(max_examples=400, **SETTINGS)
+# 200 examples (not 400): the mutants of flexlift.errors.clean tried (no cut to the limit:
+# red; the newline, U+2028 and pre-cut escapes dropped: green at 400 too) fall alike at 100
+@settings(max_examples=200, **SETTINGS)
 @given(scenarios())
 def test_parse_scenario_gives_a_scenario_or_one_line(data):
     try:
@@ -297,7 +299,10 @@ _JSON = st.recursive(_SCALAR, lambda inner: st.one_of(
     st.lists(inner, max_size=4), st.dictionaries(_KEY, inner, max_size=4)), max_leaves=20)
 
 
-@settings(max_examples=400, derandomize=True, deadline=None,
+# 200 examples (not 400): of the mutants of _entry tried, the blank-line and quoted-key
+# checks dropped are red at 100; the width, name and key-type checks dropped are green at 400
+# too (the long-text test below catches the width)
+@settings(max_examples=200, derandomize=True, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(st.dictionaries(_KEY, st.one_of(st.dictionaries(_KEY, _JSON, max_size=5), _JSON),
                        max_size=5),

@@ -114,6 +114,12 @@ def _spawn(args, env, log: Path) -> subprocess.Popen:
                             stderr=log.open("w"), start_new_session=True)
 
 
+def _listening(port: int) -> bool:
+    with contextlib.suppress(OSError), socket.create_connection(("127.0.0.1", port), 0.2):
+        return True
+    return False
+
+
 def _stop(p: subprocess.Popen) -> None:
     if p.poll() is None:
         p.kill()
@@ -136,8 +142,15 @@ def test_a_scheduler_killed_mid_sweep_ends_it_within_60_s_with_its_cases_kept(tm
         worker = _spawn(["distributed.cli.dask_worker", addr, "--host", "127.0.0.1",
                          "--nthreads", "1", "--no-nanny", "--no-dashboard"],
                         env, tmp_path / "worker.log")
+        # the sweep reconnects to a lost scheduler for its connect timeout before it ends: 2 s
+        # (the scheduler listening first, as a sweep's scheduler is), not the others' 5 s
+        t0 = time.monotonic()
+        while not _listening(port):
+            assert sched.poll() is None and time.monotonic() - t0 < 60, "no scheduler in 60 s"
+            time.sleep(0.1)
         sweep = subprocess.Popen([sys.executable, "-m", "flexlift", "sweep", str(spec), "--quiet",
-                                  "--scheduler", addr, "--out", str(out)], env=env,
+                                  "--scheduler", addr, "--out", str(out)],
+                                 env=dict(env, DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT="2s"),
                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         t0 = time.monotonic()
         while len(list(out.glob("cases/*.json"))) < 3:  # a few cases finished
