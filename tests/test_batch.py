@@ -67,7 +67,9 @@ def test_runs_of_one_numba_type_share_each_compiled_call(monkeypatch):
         sizes.append(len(loops))
         kernel.advance_many(loops, k_stops, codes)
 
-    monkeypatch.setattr(batch, "kernel", type("K", (), {"advance_many": staticmethod(counted)}))
+    monkeypatch.setattr(batch, "kernel", type("K", (), {
+        "advance_many": staticmethod(counted), "loops_of": staticmethod(kernel.loops_of),
+        "loops_append": staticmethod(kernel.loops_append)}))
     runs = [prepare(s, control=c, duration=300.0) for s, c in _variants()]
     run_batch(runs)
     assert sizes and sizes[0] == 3 and max(sizes) == 3
@@ -96,3 +98,33 @@ def test_a_runs_numba_type_is_found_once_and_again_when_a_record_is_replaced(mon
                                   and a.dtype == np.float64 else a for a in run.state])
     again = batch.loop_type(run)[1]
     assert len(calls) == 2 and again != first and again == numba.typeof(run.inputs())
+
+
+def test_a_batchs_list_is_made_by_the_cached_loop_not_numbas_own_methods():
+    """The typed List of a batch is made and filled in compiled code cached with the loop
+    (kernel.loops_of, kernel.loops_append): made from Python, numba compiled its List's
+    methods for the loop inputs' type afresh in every process, about 6 s at the first batch
+    of every replay, live estimate or design. In a fresh process, after a batch, numba's own
+    append has compiled nothing."""
+    import json
+    import subprocess
+    import sys
+
+    code = """
+import json
+from numba.typed import typedlist
+from flexlift import load_scenario
+from flexlift.ascent.batch import advance_batch
+from flexlift.ascent.loop import prepare
+tanker = load_scenario("tanker")
+runs = [prepare(tanker, "decentralized", 60.0, share=False) for _ in range(2)]
+for run in runs:
+    run.start()
+advance_batch(runs, 101)
+print(json.dumps({"append": len(typedlist._append.overloads),
+                  "steps": [int(run.state.counters[0]) for run in runs]}))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=600, check=True)
+    seen = json.loads(out.stdout.strip().splitlines()[-1])
+    assert seen == {"append": 0, "steps": [101, 101]}, seen

@@ -19,7 +19,6 @@ import weakref
 
 import numba
 import numpy as np
-from numba.typed import List
 
 from flexlift.ascent import kernel
 from flexlift.ascent.loop import Ascent
@@ -100,10 +99,10 @@ def _advance_together(runs: list[Ascent], stops: dict[int, int]) -> dict[int, in
             inputs[i], kind = loop_type(runs[i])
             groups.setdefault(kind, []).append(i)
         pending = []
-        for kind, members in groups.items():
-            loops = List.empty_list(kind)  # List() would find the type again, slowly
-            for i in members:
-                loops.append(inputs[i])
+        for members in groups.values():
+            loops = kernel.loops_of(inputs[members[0]])  # compiled, cached: not List's own
+            for i in members[1:]:
+                kernel.loops_append(loops, inputs[i])
             k_stops = np.array([stops[i] for i in members], dtype=np.int64)
             codes = np.zeros(len(members), dtype=np.int64)
             kernel.advance_many(loops, k_stops, codes)

@@ -78,6 +78,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba.typed import List
 
 from flexlift._jit import inline_jit, jit
 from flexlift._struct import as_struct, view
@@ -156,6 +157,23 @@ def advance_many(loops, k_stops, codes):
     (:mod:`flexlift.ascent.batch`)."""
     for i in range(len(loops)):
         codes[i] = _advance(_structs(loops[i]), k_stops[i])
+
+
+@jit
+def loops_of(first):
+    """A numba typed List of loop inputs holding ``first``, for :func:`advance_many`, made in
+    compiled code: made from Python (``List.empty_list`` and its ``append``), numba compiled
+    the list's methods for the inputs' type afresh in every process (about 6 s at the first
+    call; numba caches them nowhere), where this function is cached with the loop."""
+    out = List()
+    out.append(first)
+    return out
+
+
+@jit
+def loops_append(loops, item):
+    """``item`` appended to a List of :func:`loops_of` (compiled and cached as it is)."""
+    loops.append(item)
 
 
 @jit
