@@ -173,7 +173,10 @@ class Ensemble:
             run.switches.leak[:] = np.maximum(parts["leak"], 0.0)
             self.weight[i] = max(float(parts["weight"][0]), 0.05)
             self._set_weight(i)
-            self._shift(i, float(parts["clock"][0]) - self.clock[i])
+            # (the update leaves the clock, RTPP within rounding: only a real move moves it)
+            delta = float(parts["clock"][0]) - self.clock[i]
+            if abs(delta) > 1e-9:
+                self._shift(i, delta)
             run.end_held_block()
 
     def resample(self, log_weights: np.ndarray, rng: np.random.Generator,
