@@ -92,3 +92,23 @@ def test_the_separation_is_bounded_by_the_first_open_dump_valve(tanker):
     shut = np.zeros(3)
     assert est._separated_in(readings, shut, Y, sigma, feedback, (99.0, 102.0)) == \
         (99.0, 102.0)
+
+
+def test_resampling_parts_the_clocks_and_keeps_each_members_own_separation(tanker):
+    """After the separation, with the clocks spread, the weights on two members: each copy's
+    clock is drawn from the kernel (the copies part), and each copy's controllers stand at
+    its parent's own separation moved by its clock, the original and every fork alike (a
+    fork copies its parent as it stands: moved by the parent's draw already)."""
+    ens = Ensemble(tanker, 6, seed=4, control="decentralized")
+    ens.advance(3001)
+    ens.release((299.0, 300.0), np.random.default_rng(5))
+    ens.advance(3100)
+    own = np.array([separation_time(run) for run in ens.runs]) - ens.clock
+    assert np.ptp(ens.clock) > 0.1
+    log_w = np.full(6, -1e3)
+    log_w[[2, 4]] = 0.0
+    assert ens.resample(log_w, np.random.default_rng(9))
+    assert np.unique(ens.clock).size == 6  # parted
+    noted = np.array([separation_time(run) for run in ens.runs])
+    parent = noted - ens.clock
+    assert all(min(abs(p - own[2]), abs(p - own[4])) < 1e-9 for p in parent), (parent, own)

@@ -220,6 +220,7 @@ class Ensemble:
         seen: set[int] = set()
         runs, weight, ended = [], np.empty(self.m), []
         clock, pending = np.empty(self.m), self._pending[chosen.astype(int)]
+        moved: dict[int, float] = {}  # each parent's clock once its own slot has moved it
         # each parent's decay of its hold so far, before any slot's draw moves its hold
         decay = self.hold_start - np.array([run.state.H for run in self.runs])
         hold_start = np.empty_like(self.hold_start)
@@ -238,7 +239,9 @@ class Ensemble:
             if separated(run):
                 clock[slot] = shrink * self.clock[j] + (1.0 - shrink) * mean \
                     + spread * sd * rng.standard_normal()
-                shift_clock(run, clock[slot] - self.clock[j])
+                # a fork copies its parent as it stands now: moved already, if drawn before
+                shift_clock(run, clock[slot] - moved.get(j, self.clock[j]))
+                moved.setdefault(j, clock[slot])
             mean, sd = kernels["n"]
             run.state.n[:] = np.maximum(shrink * n[j] + (1.0 - shrink) * mean
                                         + spread * sd * rng.standard_normal(n.shape[1]), 0.0)
