@@ -63,21 +63,13 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
-from live_helpers import Mosquitto  # noqa: E402 - the tests' own broker, on a free port
+from live_helpers import SENSORS_10HZ, Mosquitto  # noqa: E402 - the tests' broker, sensors
 
 OUT = HERE / "live_network.json"
 PYTHON = sys.executable
-#: the tanker's sensors (benchmarks/live_master.py's at 10 Hz: live_master_10hz.json)
-TANKER_SENSORS = """
-sensors:
-  seed: 3
-  depth: {rate_Hz: 10, noise_m: 0.02, latency_s: 0.2}
-  pitch: {at: [hull], rate_Hz: 10}
-  sling_force: {rate_Hz: 10, noise_N: 5000.0, latency_s: 0.1, dropout: 0.02}
-  fill_flow: null
-  purge: {at: [bag_1, bag_2, bag_3, bag_4], rate_Hz: 10}
-  supply_pressure: null
-"""
+#: the tanker's sensors, every one at 10 Hz: the live tests' own (benchmarks/live_master.py's,
+#: live_master_10hz.json)
+TANKER_SENSORS = SENSORS_10HZ
 #: six sensors at every bag of the 73-bag plan and the hull's inclinometer, all at 10 Hz
 BAGS73_SENSORS = """
 sensors:

@@ -166,7 +166,7 @@ sensors:
 """
 
 #: every sensor at 10 Hz, the configuration the master is measured safe with
-#: (docs/reference/live.md#what-it-achieves; benchmarks/live_network.py's TANKER_SENSORS)
+#: (docs/reference/live.md#what-it-achieves; benchmarks/live_network.py takes it too)
 SENSORS_10HZ = """
 sensors:
   seed: 3
