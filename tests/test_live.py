@@ -65,6 +65,25 @@ def _hostile(url_port):
     client.disconnect()
 
 
+def _master_and_rig(scenario, mosquitto, tmp_path, speed):  # noqa: F811
+    """The rig at ``speed`` and live's master session (lift ``tk``) on ``mosquitto``, both
+    linked; live's log in ``tmp_path``. Returns (rig, live's link, log, what live said, live)."""
+    from flexlift.live.broker import parse_broker
+    from flexlift.live.log import LiveLog
+    from flexlift.live.mqtt import Link
+    from flexlift.live.rig import Rig
+    from flexlift.live.session import Live
+
+    address = parse_broker(mosquitto.url)
+    rig = Rig(scenario, Link(address, ["flexlift/tk/command/#"], "rig"), "tk", speed=speed)
+    link = Link(address, ["flexlift/tk/sensor/#"], "live")
+    assert link.start() and rig.link.start()
+    log = LiveLog(tmp_path / "live.sqlite", {"lift": "tk"})
+    said = []
+    live = Live(scenario, link, log, "tk", "master", said.append, periods=rig.periods())
+    return rig, link, log, said, live
+
+
 def test_master_through_mosquitto_survives_a_restart_and_hostile_messages(mosquitto, tmp_path):  # noqa: F811
     """The master controller on the network's readings drives the rig (100x) through the
     pull; the broker is restarted midway (readings stale: filling stopped and said, then
@@ -72,20 +91,10 @@ def test_master_through_mosquitto_survives_a_restart_and_hostile_messages(mosqui
     are counted by reason, logged, and crash nothing."""
     pytest.importorskip("flexlift.sensors.tap")  # the sensors of issue 43
     from flexlift import load_scenario
-    from flexlift.live.broker import parse_broker
-    from flexlift.live.log import LiveLog, read_table
-    from flexlift.live.mqtt import Link
-    from flexlift.live.rig import Rig
-    from flexlift.live.session import Live
+    from flexlift.live.log import read_table
 
     scenario = load_scenario(_scenario_file(tmp_path))
-    address = parse_broker(mosquitto.url)
-    rig = Rig(scenario, Link(address, ["flexlift/tk/command/#"], "rig"), "tk", speed=SPEED)
-    link = Link(address, ["flexlift/tk/sensor/#"], "live")
-    assert link.start() and rig.link.start()
-    log = LiveLog(tmp_path / "live.sqlite", {"lift": "tk"})
-    said = []
-    live = Live(scenario, link, log, "tk", "master", said.append, periods=rig.periods())
+    rig, link, log, said, live = _master_and_rig(scenario, mosquitto, tmp_path, SPEED)
     abort = threading.Event()
 
     def restart():
@@ -377,25 +386,14 @@ def test_master_through_mosquitto_lifts_the_short_tanker_safe_as_its_simulation(
     pytest.importorskip("flexlift.sensors.tap")
     from flexlift import load_scenario
     from flexlift.ascent.loop import simulate
-    from flexlift.live.broker import parse_broker
-    from flexlift.live.log import LiveLog, read_table
-    from flexlift.live.mqtt import Link
-    from flexlift.live.rig import Rig
-    from flexlift.live.session import Live
+    from flexlift.live.log import read_table
 
     scenario = load_scenario(_short_tanker(tmp_path))
     sim = simulate(scenario, control="coordinated", summary_only=True)
     assert sim.outcome["kind"] == "safe", sim.outcome  # the variant itself: safe, arrived
     duration = scenario.simulation.duration_s
     assert sim.headline["end_time_s"] < duration - 100.0, "ended by the target held"
-    address = parse_broker(mosquitto.url)
-    rig = Rig(scenario, Link(address, ["flexlift/tk/command/#"], "rig"), "tk",
-              speed=LIFT_SPEED)
-    link = Link(address, ["flexlift/tk/sensor/#"], "live")
-    assert link.start() and rig.link.start()
-    log = LiveLog(tmp_path / "live.sqlite", {"lift": "tk"})
-    said = []
-    live = Live(scenario, link, log, "tk", "master", said.append, periods=rig.periods())
+    rig, link, log, said, live = _master_and_rig(scenario, mosquitto, tmp_path, LIFT_SPEED)
     stop, rig_done = threading.Event(), threading.Event()
     wall_limit = 2.0 * duration / LIFT_SPEED  # the rig's plant ends by 600 s of lift
 

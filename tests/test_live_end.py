@@ -101,6 +101,16 @@ def _lifted_to(scenario, tmp_path, t_fed: float, t_queued: float):
     return live, net, said
 
 
+def _run_with_the_end_said(live):
+    """``live`` run to ``arrived`` with the rig's end already said; its log closed."""
+    ended = threading.Event()
+    ended.set()
+    outcome = live.run("arrived", threading.Event(), epoch=live.epoch, wall_limit=30.0,
+                       source_ended=ended)
+    live.log.close()
+    return outcome
+
+
 def test_a_rig_that_ended_after_arrival_ends_live_arrived(short_tanker, tmp_path):
     """The rig ends (said) with the last readings on their way, the bags at the target in
     them: live reads them, ends ``arrived`` at the last reading's time, with no stale
@@ -108,11 +118,7 @@ def test_a_rig_that_ended_after_arrival_ends_live_arrived(short_tanker, tmp_path
     the last reading: 5 s of lift at 10x, past every gauge's silence)."""
     live, net, said = _lifted_to(short_tanker, tmp_path, 105.0, 125.0)
     assert not live.arrived(), "not yet at the target when the rig ends"
-    ended = threading.Event()
-    ended.set()
-    outcome = live.run("arrived", threading.Event(), epoch=live.epoch, wall_limit=30.0,
-                       source_ended=ended)
-    live.log.close()
+    outcome = _run_with_the_end_said(live)
     assert outcome.reason == "arrived", (outcome.reason, said[-3:], live.master.heights())
     assert outcome.t_end == outcome.arrived_s == 125.0
     assert not [a for a in outcome.alarms if a[1] == "silent"], outcome.alarms[:5]
@@ -141,11 +147,7 @@ def test_readings_stopped_before_the_rig_said_it_ended_are_stale(short_tanker, t
     fresh; stale, the gauges alarmed, not arrived (``rig_ended``)."""
     live, net, said = _lifted_to(short_tanker, tmp_path, 125.0, 125.0)
     time.sleep(0.5)
-    ended = threading.Event()
-    ended.set()
-    outcome = live.run("arrived", threading.Event(), epoch=live.epoch, wall_limit=30.0,
-                       source_ended=ended)
-    live.log.close()
+    outcome = _run_with_the_end_said(live)
     assert outcome.reason == "rig_ended" and outcome.t_end == 125.0, outcome.reason
     assert {a[2] for a in outcome.alarms if a[1] == "silent"} == {
         f"{b}/{q}" for b in BAGS for q in ("depth", "sling_force")}
